@@ -1,0 +1,10 @@
+// Shared declarations of the pybind11 bindings: one function per src/ role.
+#pragma once
+
+#include <pybind11/pybind11.h>
+
+namespace iphong::python {
+
+void BindReflectance(pybind11::module_& m);
+
+}  // namespace iphong::python

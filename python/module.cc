@@ -1,0 +1,8 @@
+#include "bindings.h"
+#include "core/version.h"
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "iphong native core (use the `iphong` package)";
+  m.attr("__version__") = iphong::kVersion;
+  iphong::python::BindReflectance(m);
+}

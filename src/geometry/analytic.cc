@@ -1,0 +1,45 @@
+#include "geometry/analytic.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace iphong::geometry {
+
+std::string OrthographicCamera::Validate() const {
+  if (width <= 0 || height <= 0) {
+    return "camera size must be positive, got " + std::to_string(width) + "x" +
+           std::to_string(height);
+  }
+  if (!std::isfinite(extent) || !(extent > 0)) return "camera extent must be finite and > 0";
+  return "";
+}
+
+SurfaceMap SampleSphere(const OrthographicCamera& camera, const Vec3d& center, double radius) {
+  if (auto m = camera.Validate(); !m.empty()) throw std::invalid_argument(m);
+  if (!center.allFinite() || !std::isfinite(radius) || !(radius > 0)) {
+    throw std::invalid_argument("sphere needs a finite centre and a radius > 0");
+  }
+  SurfaceMap map{ImageF(camera.width, camera.height, 3), ImageF(camera.width, camera.height, 3),
+                 Mask(camera.width, camera.height, false)};
+  for (int row = 0; row < camera.height; ++row) {
+    for (int col = 0; col < camera.width; ++col) {
+      const double dx = camera.x_of_col(col) - center.x();
+      const double dy = camera.y_of_row(row) - center.y();
+      const double dz2 = radius * radius - dx * dx - dy * dy;
+      if (!(dz2 > 0)) continue;
+      const Vec3d offset(dx, dy, std::sqrt(dz2));
+      const Vec3d normal = offset / radius;
+      const Vec3d position = center + offset;
+      float* n = map.normal_cam.at(col, row);
+      float* p = map.position_cam.at(col, row);
+      for (int c = 0; c < 3; ++c) {
+        n[c] = static_cast<float>(normal[c]);
+        p[c] = static_cast<float>(position[c]);
+      }
+      map.mask.inside[static_cast<std::size_t>(row) * camera.width + col] = 1;
+    }
+  }
+  return map;
+}
+
+}  // namespace iphong::geometry

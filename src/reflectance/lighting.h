@@ -1,0 +1,76 @@
+// Lights in the camera frame, and the full model summed over them.
+//
+// A directional light has one unit direction L (surface → light) for every point. A point light
+// has a position; at surface point x its direction is (p − x)/|p − x| and, with falloff, its
+// intensities are divided by |p − x|². Ambient light is one RGB triple for the scene.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/types.h"
+#include "reflectance/phong.h"
+
+namespace iphong::reflectance {
+
+enum class LightType { kDirectional, kPoint };
+
+struct Light {
+  LightType type = LightType::kDirectional;
+  Vec3d direction_cam = Vec3d(0, 0, 1);  // unit, surface → light (directional lights)
+  Vec3d position_cam = Vec3d::Zero();    // scene units (point lights)
+  Rgb diffuse_intensity = Rgb::Ones();   // seed 003's i_d
+  Rgb specular_intensity = Rgb::Ones();  // seed 003's i_s
+  bool inverse_square_falloff = true;    // point lights only
+
+  // Throws std::invalid_argument naming the problem (zero or non-finite direction, negative
+  // or non-finite intensity). The direction is normalized.
+  static Light Directional(const Vec3d& direction_cam, const Rgb& intensity);
+  static Light Directional(const Vec3d& direction_cam, const Rgb& diffuse_intensity,
+                           const Rgb& specular_intensity);
+  static Light Point(const Vec3d& position_cam, const Rgb& intensity, bool inverse_square_falloff);
+  static Light Point(const Vec3d& position_cam, const Rgb& diffuse_intensity,
+                     const Rgb& specular_intensity, bool inverse_square_falloff);
+
+  // Empty when valid, else a one-line message.
+  std::string Validate() const;
+};
+
+struct Lighting {
+  Rgb ambient = Rgb::Zero();  // Ia
+  std::vector<Light> lights;
+
+  std::string Validate() const;
+  bool HasPointLights() const;
+};
+
+// The full model at one surface point: ambient plus every light. `position_cam` is only read for
+// point lights. Vectors are unit, camera frame.
+template <typename T>
+Vec3T<T> Shade(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam, const Vec3T<T>& position_cam,
+               const MaterialT<T>& material, const Lighting& lighting,
+               const ModelOptions& options) {
+  using std::sqrt;
+  Vec3T<T> color = AmbientTerm(Vec3T<T>(lighting.ambient.template cast<T>()), material);
+  for (const Light& light : lighting.lights) {
+    Vec3T<T> diffuse = light.diffuse_intensity.template cast<T>();
+    Vec3T<T> specular = light.specular_intensity.template cast<T>();
+    Vec3T<T> light_dir_cam;
+    if (light.type == LightType::kDirectional) {
+      light_dir_cam = light.direction_cam.template cast<T>();
+    } else {
+      const Vec3T<T> to_light = light.position_cam.template cast<T>() - position_cam;
+      const T distance2 = to_light.squaredNorm();
+      if (!(distance2 > T(0))) continue;  // the point sits on the light: no defined direction
+      light_dir_cam = to_light / sqrt(distance2);
+      if (light.inverse_square_falloff) {
+        diffuse /= distance2;
+        specular /= distance2;
+      }
+    }
+    color += LightTerm(normal_cam, view_cam, light_dir_cam, diffuse, specular, material, options);
+  }
+  return color;
+}
+
+}  // namespace iphong::reflectance

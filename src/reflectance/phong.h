@@ -1,0 +1,184 @@
+// The Phong reflection model, written once for every scalar type.
+//
+//   I = Ia ⊙ ka + Σ_lights [ Id ⊙ kd · (N·L) + Is ⊙ ks · (R·V)^n ],   R = 2(N·L)N − L,
+//
+// per RGB channel (⊙ is the channel-wise product), in the camera frame of core/types.h: N is
+// the unit surface normal, L the unit direction from the surface toward the light, V the unit
+// direction from the surface toward the viewer. Id and Is are the light's diffuse and specular
+// intensities (seed 003's i_d and i_s; usually equal). Following seed 003, a term is included
+// only where its dot product is positive, and the specular term only where N·L > 0.
+// Blinn-Phong (seed 004) replaces (R·V)^n by (N·H)^n with H = (L + V)/|L + V|.
+// The output is linear and unclamped.
+//
+// Every function is a template on the scalar T (double, float, ceres::Jet) so that the renderer,
+// the Ceres solvers and the material fitter evaluate the very same code. Branches are on values
+// only, and each branch is smooth, so Jet derivatives are defined wherever a solver can go.
+// This header deliberately does not include Ceres: Jets are recognised by their shape.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <type_traits>
+
+#include "core/types.h"
+
+namespace iphong::reflectance {
+
+// Which specular lobe the model uses.
+enum class Lobe {
+  kPhong,       // (R·V)^n
+  kBlinnPhong,  // (N·H)^n
+  kLambert,     // no specular term
+};
+
+// How the power of the lobe is computed.
+enum class PowerMode {
+  // std::pow, or repeated squaring when the exponent is a constant integer (the same value,
+  // several times faster; the exponent's derivative is zero there anyway).
+  kExact,
+  // Seed 003's approximation: max(0, c)^n ≈ max(0, 1 − βλ)^γ with γ = 2^k, β = n/γ and
+  // λ = |R − V|²/2 (|N − H|²/2 for Blinn-Phong): k squarings, no pow, robust to normalization.
+  kFastApprox,
+};
+
+struct ModelOptions {
+  Lobe lobe = Lobe::kPhong;
+  PowerMode power = PowerMode::kExact;
+  int fast_approx_log2_gamma = 2;  // γ = 2^k; seed 003: "typically 4 will be enough"
+};
+
+// Material coefficients per RGB channel; shininess is the exponent n.
+template <typename T>
+struct MaterialT {
+  Vec3T<T> ka = Vec3T<T>::Zero();
+  Vec3T<T> kd = Vec3T<T>::Zero();
+  Vec3T<T> ks = Vec3T<T>::Zero();
+  T shininess = T(1);
+};
+
+namespace detail {
+
+// A ceres::Jet has members `a` (value) and `v` (derivatives); recognise it without including Ceres.
+template <typename T, typename = void>
+struct IsJet : std::false_type {};
+template <typename T>
+struct IsJet<T, std::void_t<decltype(std::declval<T>().a), decltype(std::declval<T>().v)>>
+    : std::true_type {};
+
+// True (and *exponent set) when x is an integer constant small enough for repeated squaring:
+// for a Jet its derivative part must be zero, otherwise d/dn is needed and pow must run.
+template <typename T>
+bool IsConstantInteger(const T& x, int* exponent) {
+  if constexpr (IsJet<T>::value) {
+    for (int i = 0; i < x.v.size(); ++i) {
+      if (!(x.v[i] == 0)) return false;
+    }
+    return IsConstantInteger(x.a, exponent);
+  } else {
+    if (!(x >= T(0) && x <= T(1 << 16))) return false;
+    const int n = static_cast<int>(x);
+    if (static_cast<T>(n) != x) return false;
+    *exponent = n;
+    return true;
+  }
+}
+
+// x^n for n ≥ 0 by repeated squaring.
+template <typename T>
+T IntegerPower(const T& x, int n) {
+  T result = T(1);
+  T base = x;
+  while (n > 0) {
+    if (n & 1) result = result * base;
+    n >>= 1;
+    if (n > 0) base = base * base;
+  }
+  return result;
+}
+
+}  // namespace detail
+
+// The lobe's cosine c = R·V (Phong) or N·H (Blinn-Phong) raised to the shininess, for c > 0.
+// `lambda` = |R − V|²/2 (or |N − H|²/2), equal to 1 − c for unit vectors; only the fast
+// approximation uses it.
+template <typename T>
+T LobePower(const T& cosine, const T& lambda, const T& shininess, const ModelOptions& options) {
+  using std::exp;
+  using std::log;
+  if (options.power == PowerMode::kFastApprox) {
+    const int k = options.fast_approx_log2_gamma;
+    const T beta = shininess / T(1 << k);
+    T base = T(1) - beta * lambda;
+    if (!(base > T(0))) return T(0);
+    for (int i = 0; i < k; ++i) base = base * base;
+    return base;
+  }
+  int n = 0;
+  if (detail::IsConstantInteger(shininess, &n)) return detail::IntegerPower(cosine, n);
+  // exp(n log c) keeps d/dn = c^n log c and d/dc = n c^(n−1) finite for every c > 0, n ≥ 0.
+  return exp(shininess * log(cosine));
+}
+
+// The specular lobe value (R·V)^n or (N·H)^n for one light, zero where seed 003's rules say so
+// (N·L ≤ 0, or the lobe's cosine ≤ 0). All vectors unit, camera frame.
+template <typename T>
+T SpecularLobe(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam, const Vec3T<T>& light_dir_cam,
+               const T& shininess, const ModelOptions& options) {
+  using std::sqrt;
+  if (options.lobe == Lobe::kLambert) return T(0);
+  const T n_dot_l = normal_cam.dot(light_dir_cam);
+  if (!(n_dot_l > T(0))) return T(0);
+  if (options.lobe == Lobe::kPhong) {
+    const Vec3T<T> reflect_cam = T(2) * n_dot_l * normal_cam - light_dir_cam;
+    const T cosine = reflect_cam.dot(view_cam);
+    if (!(cosine > T(0))) return T(0);
+    const T lambda = T(0.5) * (reflect_cam - view_cam).squaredNorm();
+    return LobePower(cosine, lambda, shininess, options);
+  }
+  // Blinn-Phong. L = −V leaves H undefined; no highlight can be seen there.
+  const Vec3T<T> sum = light_dir_cam + view_cam;
+  const T sum_norm2 = sum.squaredNorm();
+  if (!(sum_norm2 > T(1e-24))) return T(0);
+  const Vec3T<T> half_cam = sum / sqrt(sum_norm2);
+  const T cosine = normal_cam.dot(half_cam);
+  if (!(cosine > T(0))) return T(0);
+  const T lambda = T(0.5) * (normal_cam - half_cam).squaredNorm();
+  return LobePower(cosine, lambda, shininess, options);
+}
+
+// One light's contribution Id ⊙ kd (N·L) + Is ⊙ ks · lobe, without the ambient term. This is the
+// residual model of photometric stereo: image j is Ia ⊙ ka + LightTerm(L_j, E_j, E_j).
+template <typename T>
+Vec3T<T> LightTerm(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam,
+                   const Vec3T<T>& light_dir_cam, const Vec3T<T>& diffuse_intensity,
+                   const Vec3T<T>& specular_intensity, const MaterialT<T>& material,
+                   const ModelOptions& options) {
+  const T n_dot_l = normal_cam.dot(light_dir_cam);
+  if (!(n_dot_l > T(0))) return Vec3T<T>::Zero();
+  Vec3T<T> result = diffuse_intensity.cwiseProduct(material.kd) * n_dot_l;
+  if (options.lobe != Lobe::kLambert) {
+    const T lobe =
+        SpecularLobe(normal_cam, view_cam, light_dir_cam, material.shininess, options);
+    result += specular_intensity.cwiseProduct(material.ks) * lobe;
+  }
+  return result;
+}
+
+// The ambient term Ia ⊙ ka.
+template <typename T>
+Vec3T<T> AmbientTerm(const Vec3T<T>& ambient_intensity, const MaterialT<T>& material) {
+  return ambient_intensity.cwiseProduct(material.ka);
+}
+
+// Converts a material between scalar types (double → ceres::Jet, double → float).
+template <typename To, typename From>
+MaterialT<To> CastMaterial(const MaterialT<From>& m) {
+  MaterialT<To> out;
+  out.ka = m.ka.template cast<To>();
+  out.kd = m.kd.template cast<To>();
+  out.ks = m.ks.template cast<To>();
+  out.shininess = To(m.shininess);
+  return out;
+}
+
+}  // namespace iphong::reflectance
