@@ -4,6 +4,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -46,8 +47,8 @@ std::string Repr(const Vec3d& v) {
 reflectance::ModelOptions MakeOptions(const std::string& model, bool fast_specular) {
   reflectance::ModelOptions options;
   options.lobe = reflectance::ParseLobe(model);
-  options.power = fast_specular ? reflectance::PowerMode::kFastApprox
-                                : reflectance::PowerMode::kExact;
+  options.power =
+      fast_specular ? reflectance::PowerMode::kFastApprox : reflectance::PowerMode::kExact;
   return options;
 }
 
@@ -69,18 +70,20 @@ py::array ShadeArrays(const py::array& normal_in, const py::object& view_in,
   if (!view || (view.size() != 3 && view.size() != normal.size())) {
     throw std::invalid_argument("view must be one 3-vector or have the shape of normal");
   }
-  Array position;
+  // A default-constructed py::array_t is an empty array, not "none": keep absence explicit.
+  std::optional<Array> position;
   if (!position_in.is_none()) {
     position = Array::ensure(position_in);
-    if (!position || position.size() != normal.size()) {
+    if (!*position || position->size() != normal.size()) {
       throw std::invalid_argument("position must have the shape of normal");
     }
   }
-  py::array_t<unsigned char, py::array::c_style | py::array::forcecast> mask;
+  using MaskArray = py::array_t<unsigned char, py::array::c_style | py::array::forcecast>;
+  std::optional<MaskArray> mask;
   if (!mask_in.is_none()) {
-    mask = py::array_t<unsigned char, py::array::c_style | py::array::forcecast>::ensure(
-        py::array(mask_in).attr("astype")("uint8"));
-    if (!mask || static_cast<std::size_t>(mask.size()) != count) {
+    mask = MaskArray::ensure(
+        py::module_::import("numpy").attr("asarray")(mask_in).attr("astype")("uint8"));
+    if (!*mask || static_cast<std::size_t>(mask->size()) != count) {
       throw std::invalid_argument("mask must have the shape of normal without its last axis");
     }
   }
@@ -91,8 +94,8 @@ py::array ShadeArrays(const py::array& normal_in, const py::object& view_in,
   points.count = count;
   points.views_cam = view.data();
   points.view_count = view.size() == 3 ? 1 : count;
-  points.positions_cam = position ? position.data() : nullptr;
-  points.mask = mask ? mask.data() : nullptr;
+  points.positions_cam = position ? position->data() : nullptr;
+  points.mask = mask ? mask->data() : nullptr;
   Scalar* out_data = out.mutable_data();
   {
     py::gil_scoped_release release;
@@ -162,8 +165,8 @@ void BindReflectance(py::module_& m) {
       [](const py::object& direction, const py::object& intensity,
          const py::object& specular_intensity) {
         const Rgb id = ToRgb(intensity, "intensity");
-        const Rgb is = specular_intensity.is_none() ? id : ToRgb(specular_intensity,
-                                                                 "specular_intensity");
+        const Rgb is =
+            specular_intensity.is_none() ? id : ToRgb(specular_intensity, "specular_intensity");
         return Light::Directional(ToVec3(direction, "direction"), id, is);
       },
       py::arg("direction"), py::arg("intensity") = 1.0, py::arg("specular_intensity") = py::none(),
@@ -174,8 +177,8 @@ void BindReflectance(py::module_& m) {
       [](const py::object& position, const py::object& intensity,
          const py::object& specular_intensity, bool falloff) {
         const Rgb id = ToRgb(intensity, "intensity");
-        const Rgb is = specular_intensity.is_none() ? id : ToRgb(specular_intensity,
-                                                                 "specular_intensity");
+        const Rgb is =
+            specular_intensity.is_none() ? id : ToRgb(specular_intensity, "specular_intensity");
         return Light::Point(ToVec3(position, "position"), id, is, falloff);
       },
       py::arg("position"), py::arg("intensity") = 1.0, py::arg("specular_intensity") = py::none(),
@@ -197,8 +200,7 @@ void BindReflectance(py::module_& m) {
           return ShadeArrays<float>(normal_array, view, position, mask, material, lighting,
                                     options);
         }
-        return ShadeArrays<double>(normal_array, view, position, mask, material, lighting,
-                                   options);
+        return ShadeArrays<double>(normal_array, view, position, mask, material, lighting, options);
       },
       py::arg("normal"), py::arg("view") = py::make_tuple(0.0, 0.0, 1.0), py::arg("material"),
       py::arg("lights"), py::arg("ambient") = 0.0, py::kw_only(), py::arg("position") = py::none(),

@@ -41,9 +41,10 @@ void PrintSeed002Example() {
                                          material, lighting, reflectance::ModelOptions{});
   std::printf("Seed 002 worked example (Phong, 2 lights, the second behind the surface):\n");
   const Vec3d seed(0.39272, 0.13292, 0.12634);
-  std::printf("  I = [%.6f %.6f %.6f]\n  seed 002 prints [0.39272 0.13292 0.12634] (it rounds each step);"
-              " largest difference %.1e\n",
-              color[0], color[1], color[2], (color - seed).cwiseAbs().maxCoeff());
+  std::printf(
+      "  I = [%.6f %.6f %.6f]\n  seed 002 prints [0.39272 0.13292 0.12634] (it rounds each step);"
+      " largest difference %.1e\n",
+      color[0], color[1], color[2], (color - seed).cwiseAbs().maxCoeff());
 }
 
 Lighting DemoLighting() {
@@ -105,8 +106,7 @@ void RunDemo(const DemoOptions& options) {
   io::WriteImage(sheet_path, sheet);
   std::printf("\nShaded sphere (per-pixel Phong, light [0.3 0.4 0.866]): %s\n",
               sphere_path.c_str());
-  std::printf("Material presets (`iphong materials` lists them):        %s\n",
-              sheet_path.c_str());
+  std::printf("Material presets (`iphong materials` lists them):        %s\n", sheet_path.c_str());
 }
 
 }  // namespace

@@ -1,8 +1,8 @@
 #include <exception>
 #include <iostream>
 
-#include "iphong/commands.h"
 #include "core/version.h"
+#include "iphong/commands.h"
 
 int main(int argc, char** argv) {
   CLI::App app{

@@ -46,8 +46,11 @@ struct Mask {
   std::vector<unsigned char> inside;
 
   Mask() = default;
-  Mask(int w, int h, bool fill) : width(w), height(h), inside(static_cast<std::size_t>(w) * h, fill) {}
-  bool at(int col, int row) const { return inside[static_cast<std::size_t>(row) * width + col] != 0; }
+  Mask(int w, int h, bool fill)
+      : width(w), height(h), inside(static_cast<std::size_t>(w) * h, fill) {}
+  bool at(int col, int row) const {
+    return inside[static_cast<std::size_t>(row) * width + col] != 0;
+  }
   std::size_t count() const;
 };
 

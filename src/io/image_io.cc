@@ -15,7 +15,8 @@ namespace {
 
 bool IsFloatFormat(const fs::path& path) {
   std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return ext == ".exr" || ext == ".hdr" || ext == ".pfm";
 }
 

@@ -19,7 +19,7 @@ void CheckMaterial(const Material& material);
 
 // A published material: the coefficients plus where they come from.
 struct MaterialPreset {
-  std::string name;    // lookup key, lower case with dashes
+  std::string name;  // lookup key, lower case with dashes
   Material material;
   std::string source;  // which seed table
   std::string note;    // how a published range was turned into one value, if it was

@@ -157,8 +157,7 @@ Vec3T<T> LightTerm(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam,
   if (!(n_dot_l > T(0))) return Vec3T<T>::Zero();
   Vec3T<T> result = diffuse_intensity.cwiseProduct(material.kd) * n_dot_l;
   if (options.lobe != Lobe::kLambert) {
-    const T lobe =
-        SpecularLobe(normal_cam, view_cam, light_dir_cam, material.shininess, options);
+    const T lobe = SpecularLobe(normal_cam, view_cam, light_dir_cam, material.shininess, options);
     result += specular_intensity.cwiseProduct(material.ks) * lobe;
   }
   return result;

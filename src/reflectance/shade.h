@@ -13,9 +13,9 @@ namespace iphong::reflectance {
 // Arrays of 3-vectors stored as count×3 row-major, camera frame.
 template <typename Scalar>
 struct PointsView {
-  const Scalar* normals_cam = nullptr;    // count×3; normalized here, zero length is an error
+  const Scalar* normals_cam = nullptr;  // count×3; normalized here, zero length is an error
   std::size_t count = 0;
-  const Scalar* views_cam = nullptr;      // count×3, or one 3-vector when view_count == 1
+  const Scalar* views_cam = nullptr;  // count×3, or one 3-vector when view_count == 1
   std::size_t view_count = 1;
   const Scalar* positions_cam = nullptr;  // count×3; required only with point lights
   const unsigned char* mask = nullptr;    // count entries, nonzero = shade; null = all

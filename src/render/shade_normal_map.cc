@@ -8,8 +8,7 @@ namespace iphong::render {
 
 ImageF ShadeSurfaceMap(const geometry::SurfaceMap& surface,
                        const geometry::OrthographicCamera& camera,
-                       const reflectance::Material& material,
-                       const reflectance::Lighting& lighting,
+                       const reflectance::Material& material, const reflectance::Lighting& lighting,
                        const reflectance::ModelOptions& options) {
   const int w = surface.normal_cam.width;
   const int h = surface.normal_cam.height;
