@@ -55,7 +55,7 @@ Lighting DemoLighting() {
 }
 
 ImageF RenderSphere(int size, const Material& material, const Lighting& lighting) {
-  geometry::OrthographicCamera camera;
+  geometry::Camera camera;
   camera.width = camera.height = size;
   camera.extent = 2.0;
   const auto surface = geometry::SampleSphere(camera, Vec3d::Zero(), 0.8);

@@ -5,17 +5,12 @@
 
 namespace iphong::geometry {
 
-std::string OrthographicCamera::Validate() const {
-  if (width <= 0 || height <= 0) {
-    return "camera size must be positive, got " + std::to_string(width) + "x" +
-           std::to_string(height);
-  }
-  if (!std::isfinite(extent) || !(extent > 0)) return "camera extent must be finite and > 0";
-  return "";
-}
-
-SurfaceMap SampleSphere(const OrthographicCamera& camera, const Vec3d& center, double radius) {
+SurfaceMap SampleSphere(const Camera& camera, const Vec3d& center, double radius) {
   if (auto m = camera.Validate(); !m.empty()) throw std::invalid_argument(m);
+  if (camera.type != CameraType::kOrthographic || !camera.rotation.isIdentity() ||
+      !camera.center.isZero()) {
+    throw std::invalid_argument("SampleSphere needs the orthographic main camera");
+  }
   if (!center.allFinite() || !std::isfinite(radius) || !(radius > 0)) {
     throw std::invalid_argument("sphere needs a finite centre and a radius > 0");
   }

@@ -17,6 +17,6 @@ struct SurfaceMap {
 
 // The front half of a sphere seen by an orthographic camera, sampled at pixel centres.
 // Throws std::invalid_argument for an invalid camera or a non-positive radius.
-SurfaceMap SampleSphere(const OrthographicCamera& camera, const Vec3d& center, double radius);
+SurfaceMap SampleSphere(const Camera& camera, const Vec3d& center, double radius);
 
 }  // namespace iphong::geometry

@@ -1,10 +1,11 @@
 #include "reflectance/shade.h"
 
+#include "core/parallel.h"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace iphong::reflectance {
@@ -82,22 +83,7 @@ void ShadePoints(const PointsView<Scalar>& points, const Material& material,
     }
   };
 
-  constexpr std::size_t kMinPointsPerThread = 1 << 15;
-  int workers = threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency());
-  workers = static_cast<int>(
-      std::clamp<std::size_t>(points.count / kMinPointsPerThread, 1, std::max(workers, 1)));
-  if (workers == 1) {
-    run(0, points.count);
-    return;
-  }
-  std::vector<std::thread> pool;
-  const std::size_t chunk = (points.count + workers - 1) / workers;
-  for (int w = 0; w < workers; ++w) {
-    const std::size_t begin = w * chunk;
-    const std::size_t end = std::min(points.count, begin + chunk);
-    if (begin < end) pool.emplace_back(run, begin, end);
-  }
-  for (auto& t : pool) t.join();
+  ParallelFor(0, points.count, std::size_t{1} << 15, threads, run);
 }
 
 template void ShadePoints<float>(const PointsView<float>&, const Material&, const Lighting&,

@@ -6,8 +6,7 @@
 
 namespace iphong::render {
 
-ImageF ShadeSurfaceMap(const geometry::SurfaceMap& surface,
-                       const geometry::OrthographicCamera& camera,
+ImageF ShadeSurfaceMap(const geometry::SurfaceMap& surface, const geometry::Camera& camera,
                        const reflectance::Material& material, const reflectance::Lighting& lighting,
                        const reflectance::ModelOptions& options) {
   const int w = surface.normal_cam.width;

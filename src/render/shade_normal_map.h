@@ -11,8 +11,7 @@
 namespace iphong::render {
 
 // Returns a linear, unclamped 3-channel image (0 where the mask is off). Orthographic view.
-ImageF ShadeSurfaceMap(const geometry::SurfaceMap& surface,
-                       const geometry::OrthographicCamera& camera,
+ImageF ShadeSurfaceMap(const geometry::SurfaceMap& surface, const geometry::Camera& camera,
                        const reflectance::Material& material, const reflectance::Lighting& lighting,
                        const reflectance::ModelOptions& options);
 

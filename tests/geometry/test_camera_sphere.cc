@@ -8,8 +8,8 @@
 namespace iphong::geometry {
 namespace {
 
-TEST(OrthographicCamera, PixelCentresAndYUp) {
-  OrthographicCamera camera;
+TEST(Camera, PixelCentresAndYUp) {
+  Camera camera;
   camera.width = 4;
   camera.height = 2;
   camera.extent = 2.0;  // x ∈ [−1, 1], y ∈ [−0.5, 0.5], pixel size 0.5
@@ -23,7 +23,7 @@ TEST(OrthographicCamera, PixelCentresAndYUp) {
 }
 
 TEST(SampleSphere, UnitNormalsPointOutwardInTheSpecFrame) {
-  OrthographicCamera camera;
+  Camera camera;
   camera.width = camera.height = 64;
   const SurfaceMap map = SampleSphere(camera, Vec3d::Zero(), 0.8);
   // Area: π r² / pixel area, to within the boundary pixels.
@@ -47,7 +47,7 @@ TEST(SampleSphere, UnitNormalsPointOutwardInTheSpecFrame) {
 }
 
 TEST(SampleSphere, RejectsBadArguments) {
-  OrthographicCamera camera;
+  Camera camera;
   EXPECT_THROW(SampleSphere(camera, Vec3d::Zero(), 0.0), std::invalid_argument);
   EXPECT_THROW(SampleSphere(camera, Vec3d(0, NAN, 0), 1.0), std::invalid_argument);
   camera.width = 0;

@@ -26,7 +26,7 @@ Brightest FindBrightest(const ImageF& image, int channel) {
 }
 
 TEST(ShadeSurfaceMap, LambertPeakWhereNormalEqualsLight) {
-  geometry::OrthographicCamera camera;
+  geometry::Camera camera;
   camera.width = camera.height = 201;
   const auto sphere = geometry::SampleSphere(camera, Vec3d::Zero(), 0.9);
   reflectance::Material m;
@@ -46,7 +46,7 @@ TEST(ShadeSurfaceMap, LambertPeakWhereNormalEqualsLight) {
 
 TEST(ShadeSurfaceMap, PhongHighlightAtTheHalfwayNormal) {
   // Orthographic view V = z: the highlight peak is where R = V, i.e. N ∥ (L + V).
-  geometry::OrthographicCamera camera;
+  geometry::Camera camera;
   camera.width = camera.height = 201;
   const auto sphere = geometry::SampleSphere(camera, Vec3d::Zero(), 0.9);
   reflectance::Material m;
@@ -65,7 +65,7 @@ TEST(ShadeSurfaceMap, PhongHighlightAtTheHalfwayNormal) {
 }
 
 TEST(ShadeSurfaceMap, SizeMismatchIsAnError) {
-  geometry::OrthographicCamera camera;
+  geometry::Camera camera;
   camera.width = camera.height = 8;
   auto sphere = geometry::SampleSphere(camera, Vec3d::Zero(), 0.5);
   sphere.mask = Mask(4, 4, true);

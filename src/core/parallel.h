@@ -1,0 +1,44 @@
+// A minimal parallel loop: [begin, end) cut into chunks handed out to worker threads.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <cstddef>
+#include <thread>
+#include <vector>
+
+namespace iphong {
+
+inline int ResolveThreads(int threads) {
+  if (threads > 0) return threads;
+  const unsigned hardware = std::thread::hardware_concurrency();
+  return hardware == 0 ? 1 : static_cast<int>(hardware);
+}
+
+// Calls body(chunk_begin, chunk_end) for consecutive chunks of at most `chunk` items, from up to
+// `threads` threads (0 = hardware concurrency). The body must not throw.
+template <typename Body>
+void ParallelFor(std::size_t begin, std::size_t end, std::size_t chunk, int threads, Body body) {
+  if (end <= begin) return;
+  chunk = std::max<std::size_t>(chunk, 1);
+  const std::size_t chunks = (end - begin + chunk - 1) / chunk;
+  const int workers = static_cast<int>(std::min<std::size_t>(ResolveThreads(threads), chunks));
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t c = next++; c < chunks; c = next++) {
+      const std::size_t b = begin + c * chunk;
+      body(b, std::min(end, b + chunk));
+    }
+  };
+  if (workers <= 1) {
+    work();
+    return;
+  }
+  std::vector<std::thread> pool;
+  pool.reserve(workers - 1);
+  for (int w = 1; w < workers; ++w) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+}
+
+}  // namespace iphong

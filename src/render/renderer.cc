@@ -1,0 +1,441 @@
+#include "render/renderer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+#include <random>
+#include <stdexcept>
+
+#include "core/parallel.h"
+#include "reflectance/shade.h"
+#include "render/rasterizer.h"
+
+namespace iphong::render {
+namespace {
+
+using geometry::Camera;
+using geometry::CameraType;
+using reflectance::Light;
+using reflectance::LightType;
+using reflectance::Material;
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+void Require(const std::string& message) {
+  if (!message.empty()) throw std::invalid_argument(message);
+}
+
+// Bilinear lookup with wrap-around, v = 0 at the texture's top row.
+Vec3d SampleTexture(const ImageF& texture, double u, double v) {
+  const double x = (u - std::floor(u)) * texture.width - 0.5;
+  const double y = (v - std::floor(v)) * texture.height - 0.5;
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  const double fx = x - x0, fy = y - y0;
+  auto texel = [&](int col, int row) {
+    col = ((col % texture.width) + texture.width) % texture.width;
+    row = ((row % texture.height) + texture.height) % texture.height;
+    const float* p = texture.at(col, row);
+    return texture.channels >= 3 ? Vec3d(p[0], p[1], p[2]) : Vec3d::Constant(p[0]);
+  };
+  return (1 - fy) * ((1 - fx) * texel(x0, y0) + fx * texel(x0 + 1, y0)) +
+         fy * ((1 - fx) * texel(x0, y0 + 1) + fx * texel(x0 + 1, y0 + 1));
+}
+
+Vec3d Albedo(const SceneObject& object, double u, double v) {
+  if (object.albedo_texture.pixels.empty()) return object.material.kd;
+  return object.material.kd.cwiseProduct(SampleTexture(object.albedo_texture, u, v));
+}
+
+// A rotation whose rows are camera axes with +z along `toward_viewer`.
+Eigen::Matrix3d LookRotation(const Vec3d& toward_viewer) {
+  const Vec3d z = toward_viewer.normalized();
+  const Vec3d up = std::abs(z.y()) < 0.9 ? Vec3d(0, 1, 0) : Vec3d(1, 0, 0);
+  const Vec3d x = up.cross(z).normalized();
+  const Vec3d y = z.cross(x);
+  Eigen::Matrix3d r;
+  r.row(0) = x.transpose();
+  r.row(1) = y.transpose();
+  r.row(2) = z.transpose();
+  return r;
+}
+
+// Depth as seen from one light; a point is lit when it is not farther than the stored depth.
+class ShadowMap {
+ public:
+  ShadowMap(const Light& light, const std::vector<RasterItem>& items, const Vec3d& scene_center,
+            double scene_radius, const RenderOptions& options) {
+    const int size = options.shadow_map_size;
+    if (light.type == LightType::kDirectional) {
+      camera_ = Camera::Orthographic(size, size, 2.1 * scene_radius);
+      camera_.rotation = LookRotation(light.direction_cam);
+      camera_.center = scene_center;
+      texel_ = camera_.pixel_size();
+    } else {
+      const Vec3d offset = light.position_cam - scene_center;
+      const double distance = offset.norm();
+      if (!(distance > 1.05 * scene_radius)) {
+        throw std::invalid_argument(
+            "shadows need every point light outside the scene's bounding sphere");
+      }
+      const double half_angle = std::asin(scene_radius / distance) * 1.05;
+      camera_.type = CameraType::kPerspective;
+      camera_.width = camera_.height = size;
+      camera_.fx = camera_.fy = 0.5 * size / std::tan(half_angle);
+      camera_.cx = camera_.cy = 0.5 * size;
+      camera_.rotation = LookRotation(offset);
+      camera_.center = light.position_cam;
+      perspective_ = true;
+    }
+    RasterOptions raster;
+    raster.depth_only = true;
+    raster.threads = options.threads;
+    depth_ = Rasterize(items, camera_, raster).depth;
+    bias_texels_ = options.shadow_bias_texels;
+  }
+
+  bool Lit(const Vec3d& point, double n_dot_l) const {
+    const Vec3d s = camera_.Project(point);
+    const int col = static_cast<int>(std::floor(s.x())), row = static_cast<int>(std::floor(s.y()));
+    if (col < 0 || row < 0 || col >= camera_.width || row >= camera_.height) return true;
+    const float stored = depth_[static_cast<std::size_t>(row) * camera_.width + col];
+    // Slope-scaled bias: a surface seen at a grazing angle spans many depths within one texel.
+    const double slope = std::sqrt(std::max(0.0, 1 - n_dot_l * n_dot_l)) / std::max(n_dot_l, 0.1);
+    const double texel = perspective_ ? s.z() / camera_.fx : texel_;  // footprint at that depth
+    return s.z() <= stored + bias_texels_ * texel * (1 + slope);
+  }
+
+ private:
+  Camera camera_;
+  std::vector<float> depth_;
+  double texel_ = 0;
+  double bias_texels_ = 1.5;
+  bool perspective_ = false;
+};
+
+// Light j's direction and intensities at a point (falloff applied); false where undefined.
+bool LightAt(const Light& light, const Vec3d& point, Vec3d* dir, Vec3d* diffuse, Vec3d* specular) {
+  *diffuse = light.diffuse_intensity;
+  *specular = light.specular_intensity;
+  if (light.type == LightType::kDirectional) {
+    *dir = light.direction_cam;
+    return true;
+  }
+  const Vec3d to_light = light.position_cam - point;
+  const double d2 = to_light.squaredNorm();
+  if (!(d2 > 0)) return false;
+  *dir = to_light / std::sqrt(d2);
+  if (light.inverse_square_falloff) {
+    *diffuse /= d2;
+    *specular /= d2;
+  }
+  return true;
+}
+
+// Evaluates ambient + the selected lights (all, or only `only_light`) at one surface point.
+struct PointShader {
+  const Scene& scene;
+  const RenderOptions& options;
+  const std::vector<std::optional<ShadowMap>>& shadows;
+
+  Vec3d operator()(const SceneObject& object, const Vec3d& normal, const Vec3d& position,
+                   const Vec3d& albedo, int only_light) const {
+    Material material = object.material;
+    material.kd = albedo;
+    const Vec3d view = scene.camera.ViewDirection(position);
+    Vec3d color = reflectance::AmbientTerm(scene.lighting.ambient, material);
+    const auto& lights = scene.lighting.lights;
+    for (std::size_t j = 0; j < lights.size(); ++j) {
+      if (only_light >= 0 && static_cast<int>(j) != only_light) continue;
+      Vec3d dir, diffuse, specular;
+      if (!LightAt(lights[j], position, &dir, &diffuse, &specular)) continue;
+      const double n_dot_l = normal.dot(dir);
+      if (!(n_dot_l > 0)) continue;
+      if (shadows[j] && !shadows[j]->Lit(position, n_dot_l)) continue;
+      color +=
+          reflectance::LightTerm(normal, view, dir, diffuse, specular, material, options.model);
+    }
+    return color;
+  }
+};
+
+// Per-corner colours for Gouraud (at each vertex) or flat (at each centroid) shading.
+std::vector<Vec3f> CornerColors(const SceneObject& object, const PointShader& shade,
+                                Shading shading, int only_light, int threads) {
+  const auto& mesh = object.mesh;
+  std::vector<Vec3f> colors(3 * mesh.triangles.size());
+  ParallelFor(0, mesh.triangles.size(), 1024, threads, [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e; ++t) {
+      const auto& tri = mesh.triangles[t];
+      auto uv = [&](int k) {
+        return mesh.uvs.empty() ? Eigen::Vector2d::Zero().eval() : mesh.uvs[tri[k]];
+      };
+      if (shading == Shading::kFlat) {
+        const Vec3d centroid =
+            (mesh.positions[tri[0]] + mesh.positions[tri[1]] + mesh.positions[tri[2]]) / 3.0;
+        const Eigen::Vector2d c_uv = (uv(0) + uv(1) + uv(2)) / 3.0;
+        const Vec3f color = shade(object, geometry::FaceNormal(mesh, t), centroid,
+                                  Albedo(object, c_uv.x(), c_uv.y()), only_light)
+                                .cast<float>();
+        for (int k = 0; k < 3; ++k) colors[3 * t + k] = color;
+      } else {
+        for (int k = 0; k < 3; ++k) {
+          colors[3 * t + k] = shade(object, mesh.corner_normals[3 * t + k], mesh.positions[tri[k]],
+                                    Albedo(object, uv(k).x(), uv(k).y()), only_light)
+                                  .cast<float>();
+        }
+      }
+    }
+  });
+  return colors;
+}
+
+// Averages s×s blocks. For ground-truth buffers (`covered_only`) only covered samples count and
+// the result is 0 where none is covered.
+ImageF Downsample(const ImageF& fine, int s, const std::vector<int>* object_id, bool renormalize) {
+  const int w = fine.width / s, h = fine.height / s, ch = fine.channels;
+  ImageF coarse(w, h, ch);
+  for (int row = 0; row < h; ++row) {
+    for (int col = 0; col < w; ++col) {
+      float* out = coarse.at(col, row);
+      int count = 0;
+      for (int dy = 0; dy < s; ++dy) {
+        for (int dx = 0; dx < s; ++dx) {
+          const int fc = col * s + dx, fr = row * s + dy;
+          if (object_id && (*object_id)[static_cast<std::size_t>(fr) * fine.width + fc] < 0) {
+            continue;
+          }
+          const float* in = fine.at(fc, fr);
+          for (int c = 0; c < ch; ++c) out[c] += in[c];
+          ++count;
+        }
+      }
+      const float scale = object_id ? (count ? 1.0f / count : 0.0f) : 1.0f / (s * s);
+      for (int c = 0; c < ch; ++c) out[c] *= scale;
+      if (renormalize && count) {
+        const float norm = std::sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2]);
+        if (norm > 0)
+          for (int c = 0; c < 3; ++c) out[c] /= norm;
+      }
+    }
+  }
+  return coarse;
+}
+
+}  // namespace
+
+Shading ParseShading(const std::string& name) {
+  if (name == "flat") return Shading::kFlat;
+  if (name == "gouraud") return Shading::kGouraud;
+  if (name == "phong") return Shading::kPhong;
+  throw std::invalid_argument("unknown shading '" + name + "' (expected flat, gouraud or phong)");
+}
+
+std::string ShadingName(Shading shading) {
+  switch (shading) {
+    case Shading::kFlat:
+      return "flat";
+    case Shading::kGouraud:
+      return "gouraud";
+    case Shading::kPhong:
+      return "phong";
+  }
+  return "phong";
+}
+
+std::string Scene::Validate() const {
+  if (auto m = camera.Validate(); !m.empty()) return m;
+  if (auto m = lighting.Validate(); !m.empty()) return m;
+  if (objects.empty()) return "the scene has no objects";
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const std::string where = "object " + std::to_string(i) +
+                              (objects[i].name.empty() ? "" : " (" + objects[i].name + ")") + ": ";
+    if (auto m = objects[i].mesh.Validate(); !m.empty()) return where + m;
+    if (objects[i].mesh.corner_normals.size() != 3 * objects[i].mesh.triangles.size()) {
+      return where + "mesh has no normals";
+    }
+    if (auto m = reflectance::ValidateMaterial(objects[i].material); !m.empty()) return where + m;
+    const ImageF& tex = objects[i].albedo_texture;
+    if (!tex.pixels.empty() && (tex.width <= 0 || tex.height <= 0 || tex.channels <= 0)) {
+      return where + "empty albedo texture";
+    }
+    if (!tex.pixels.empty() && objects[i].mesh.uvs.empty()) {
+      return where + "an albedo texture needs uv coordinates on the mesh";
+    }
+  }
+  return "";
+}
+
+std::string NoiseOptions::Validate() const {
+  if (!std::isfinite(gaussian_sigma) || gaussian_sigma < 0) return "noise sigma must be >= 0";
+  if (!std::isfinite(shot_photons) || shot_photons < 0) return "shot-noise photons must be >= 0";
+  if (quantization_bits < 0 || quantization_bits > 24) return "quantization bits must be in 0..24";
+  return "";
+}
+
+std::string RenderOptions::Validate() const {
+  if (supersampling < 1 || supersampling > 8) return "supersampling must be in 1..8";
+  if (shadow_map_size < 16 || shadow_map_size > 16384) {
+    return "shadow map size must be in 16..16384";
+  }
+  if (!std::isfinite(shadow_bias_texels) || shadow_bias_texels < 0) {
+    return "shadow bias must be >= 0";
+  }
+  if (auto m = reflectance::ValidateModelOptions(model); !m.empty()) return m;
+  return noise.Validate();
+}
+
+void ApplyNoise(ImageF& image, const NoiseOptions& options, std::uint64_t index) {
+  if (!options.enabled()) return;
+  std::mt19937_64 rng(options.seed * 0x9E3779B97F4A7C15ull + index);
+  std::normal_distribution<double> gaussian(0.0, 1.0);
+  const double levels =
+      options.quantization_bits > 0 ? std::ldexp(1.0, options.quantization_bits) - 1.0 : 0.0;
+  for (float& value : image.pixels) {
+    double v = value;
+    if (options.shot_photons > 0 && v > 0) {
+      std::poisson_distribution<long long> photons(v * options.shot_photons);
+      v = photons(rng) / options.shot_photons;
+    }
+    if (options.gaussian_sigma > 0) v += options.gaussian_sigma * gaussian(rng);
+    if (levels > 0) v = std::round(std::clamp(v, 0.0, 1.0) * levels) / levels;
+    value = static_cast<float>(v);
+  }
+}
+
+RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_light) {
+  Require(scene.Validate());
+  Require(options.Validate());
+  const int s = options.supersampling;
+  Camera camera = scene.camera;
+  camera.width *= s;
+  camera.height *= s;
+  camera.fx *= s;
+  camera.fy *= s;
+  camera.cx *= s;
+  camera.cy *= s;
+  Scene fine_scene = scene;  // shading needs the supersampled camera's view directions
+  fine_scene.camera = camera;
+
+  std::vector<RasterItem> items;
+  Vec3d lo = Vec3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+    items.push_back({&scene.objects[i].mesh, static_cast<int>(i), nullptr});
+    for (const Vec3d& p : scene.objects[i].mesh.positions) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+  }
+  const Vec3d center = 0.5 * (lo + hi);
+  const double radius = std::max(0.5 * (hi - lo).norm(), 1e-9);
+
+  const auto raster_start = Clock::now();
+  std::vector<std::optional<ShadowMap>> shadows(scene.lighting.lights.size());
+  if (options.shadows) {
+    for (std::size_t j = 0; j < shadows.size(); ++j) {
+      shadows[j].emplace(scene.lighting.lights[j], items, center, radius, options);
+    }
+  }
+  RasterOptions raster;
+  raster.renormalize_normals = options.renormalize_normals;
+  raster.threads = options.threads;
+  const GBuffer gbuffer = Rasterize(items, camera, raster);
+  double raster_seconds = Seconds(raster_start);
+
+  const auto shade_start = Clock::now();
+  const PointShader shade{fine_scene, options, shadows};
+  const std::size_t pixels = static_cast<std::size_t>(camera.width) * camera.height;
+  const int lights = static_cast<int>(scene.lighting.lights.size());
+
+  // Ground truth at full (supersampled) resolution.
+  ImageF albedo(camera.width, camera.height, 3), depth(camera.width, camera.height, 1);
+  ParallelFor(0, pixels, 8192, options.threads, [&](std::size_t b, std::size_t e) {
+    for (std::size_t p = b; p < e; ++p) {
+      if (!gbuffer.covered(p)) continue;
+      const Vec3d a = Albedo(scene.objects[gbuffer.object_id[p]], gbuffer.uv.pixels[2 * p],
+                             gbuffer.uv.pixels[2 * p + 1]);
+      for (int c = 0; c < 3; ++c) albedo.pixels[3 * p + c] = static_cast<float>(a[c]);
+      depth.pixels[p] = gbuffer.depth[p];
+    }
+  });
+
+  // One image per requested light set: −1 = all lights, j = light j alone.
+  std::vector<int> light_sets = {-1};
+  if (per_light)
+    for (int j = 0; j < lights; ++j) light_sets.push_back(j);
+  std::vector<ImageF> images;
+  for (int only_light : light_sets) {
+    ImageF image(camera.width, camera.height, 3);
+    if (options.shading == Shading::kPhong) {
+      ParallelFor(0, pixels, 4096, options.threads, [&](std::size_t b, std::size_t e) {
+        for (std::size_t p = b; p < e; ++p) {
+          if (!gbuffer.covered(p)) continue;
+          const float* n = gbuffer.normal_cam.pixels.data() + 3 * p;
+          const float* x = gbuffer.position_cam.pixels.data() + 3 * p;
+          const float* a = albedo.pixels.data() + 3 * p;
+          const Vec3d color = shade(scene.objects[gbuffer.object_id[p]], Vec3d(n[0], n[1], n[2]),
+                                    Vec3d(x[0], x[1], x[2]), Vec3d(a[0], a[1], a[2]), only_light);
+          for (int c = 0; c < 3; ++c) image.pixels[3 * p + c] = static_cast<float>(color[c]);
+        }
+      });
+    } else {
+      // Gouraud and flat: colours at the corners, interpolated by the rasterizer.
+      std::vector<std::vector<Vec3f>> colors(scene.objects.size());
+      std::vector<RasterItem> colored = items;
+      for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+        colors[i] =
+            CornerColors(scene.objects[i], shade, options.shading, only_light, options.threads);
+        colored[i].corner_colors = &colors[i];
+      }
+      const auto t0 = Clock::now();
+      const GBuffer colored_buffer = Rasterize(colored, camera, raster);
+      raster_seconds += Seconds(t0);
+      for (std::size_t p = 0; p < pixels; ++p) {
+        if (!colored_buffer.covered(p)) continue;
+        for (int c = 0; c < 3; ++c)
+          image.pixels[3 * p + c] = colored_buffer.color.pixels[3 * p + c];
+      }
+    }
+    images.push_back(std::move(image));
+  }
+
+  RenderOutput out;
+  const auto* ids = &gbuffer.object_id;
+  for (std::size_t k = 0; k < images.size(); ++k) {
+    ImageF image = s > 1 ? Downsample(images[k], s, nullptr, false) : std::move(images[k]);
+    ApplyNoise(image, options.noise, k);
+    if (k == 0) {
+      out.image = std::move(image);
+    } else {
+      out.per_light.push_back(std::move(image));
+    }
+  }
+  out.normal_cam = s > 1 ? Downsample(gbuffer.normal_cam, s, ids, true) : gbuffer.normal_cam;
+  out.albedo = s > 1 ? Downsample(albedo, s, ids, false) : albedo;
+  out.depth = s > 1 ? Downsample(depth, s, ids, false) : depth;
+  out.mask = Mask(scene.camera.width, scene.camera.height, false);
+  for (int row = 0; row < scene.camera.height; ++row) {
+    for (int col = 0; col < scene.camera.width; ++col) {
+      int covered = 0;
+      for (int dy = 0; dy < s; ++dy)
+        for (int dx = 0; dx < s; ++dx)
+          covered +=
+              gbuffer.covered(static_cast<std::size_t>(row * s + dy) * camera.width + col * s + dx);
+      const std::size_t p = static_cast<std::size_t>(row) * scene.camera.width + col;
+      out.mask.inside[p] = 2 * covered > s * s;
+      if (!out.mask.inside[p]) {  // ground truth is 0 outside the mask
+        for (int c = 0; c < 3; ++c)
+          out.normal_cam.pixels[3 * p + c] = out.albedo.pixels[3 * p + c] = 0;
+        out.depth.pixels[p] = 0;
+      }
+    }
+  }
+  out.raster_seconds = raster_seconds;
+  out.shade_seconds = Seconds(shade_start);
+  return out;
+}
+
+}  // namespace iphong::render
