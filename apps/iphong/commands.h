@@ -8,10 +8,12 @@ namespace iphong::cli {
 
 void AddDemoCommand(CLI::App& app);
 void AddMaterialsCommand(CLI::App& app);
+void AddRenderCommand(CLI::App& app);
 
 // Every subcommand, in the order `iphong --help` lists them. New commands are added here only.
 inline void AddAllCommands(CLI::App& app) {
   AddDemoCommand(app);
+  AddRenderCommand(app);
   AddMaterialsCommand(app);
 }
 

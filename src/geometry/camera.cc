@@ -36,6 +36,17 @@ Vec3d Camera::Project(const Vec3d& point) const {
   return Vec3d(cx + fx * q.x() / depth, cy - fy * q.y() / depth, depth);
 }
 
+Vec3d Camera::Unproject(double x, double y, double depth) const {
+  Vec3d q;
+  if (type == CameraType::kOrthographic) {
+    const double pixel = pixel_size();
+    q = Vec3d(x * pixel - 0.5 * extent, 0.5 * extent * height / width - y * pixel, -depth);
+  } else {
+    q = Vec3d((x - cx) / fx * depth, -(y - cy) / fy * depth, -depth);
+  }
+  return rotation.transpose() * q + center;
+}
+
 Vec3d Camera::ViewDirection(const Vec3d& point) const {
   if (type == CameraType::kOrthographic) return view_cam();
   return (center - point).normalized();

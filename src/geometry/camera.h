@@ -43,6 +43,8 @@ struct Camera {
 
   // Scene point → (screen x, screen y, depth).
   Vec3d Project(const Vec3d& point) const;
+  // The scene point seen at screen (x, y) at `depth` (the inverse of Project).
+  Vec3d Unproject(double x, double y, double depth) const;
   // Unit direction from a scene point toward the viewer.
   Vec3d ViewDirection(const Vec3d& point) const;
   // Unit view direction for an orthographic camera (the same everywhere).

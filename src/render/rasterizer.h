@@ -3,7 +3,7 @@
 // Every triangle edge goes into an edge table keyed by the first scan line it crosses; each scan
 // line moves the edges that start there into the active edge list, drops the ones that ended,
 // pairs a triangle's two active edges into a span and fills it. Attributes (depth, normal,
-// position, uv, colour) are interpolated in two incremental stages exactly as in seed 001: along
+// uv, colour) are interpolated in two incremental stages exactly as in seed 001: along
 // each edge by a constant step per scan line, then along the span by a constant step per pixel.
 // Under a perspective camera the attributes are interpolated divided by depth and recovered per
 // pixel, which makes them perspective-correct.
@@ -39,6 +39,11 @@ struct RasterOptions {
   bool depth_only = false;
   // Count every fragment drawn per pixel, hidden or not (overdraw; watertightness checks).
   bool count_fragments = false;
+  // Skip triangles seen from behind (clockwise on screen). For closed, consistently wound meshes
+  // this changes nothing in the image and halves the work.
+  bool cull_back_faces = false;
+  // Interpolate uv coordinates (needed only for textures).
+  bool interpolate_uv = true;
   int threads = 0;  // 0 = all cores
   int band_rows = 16;
 
@@ -58,6 +63,10 @@ struct GBuffer {
   std::vector<int> fragments;  // per pixel, only with RasterOptions::count_fragments
 
   bool covered(std::size_t pixel) const { return object_id[pixel] >= 0; }
+  // The surface point seen at a covered pixel (positions are not stored: depth determines them).
+  Vec3d Position(const geometry::Camera& camera, std::size_t pixel) const {
+    return camera.Unproject(pixel % width + 0.5, pixel / width + 0.5, depth[pixel]);
+  }
 };
 
 // Rasterizes every item into a fresh G-buffer of the camera's size. Triangles with a vertex at or

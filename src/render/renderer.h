@@ -53,6 +53,7 @@ struct RenderOptions {
   Shading shading = Shading::kPhong;
   reflectance::ModelOptions model;
   bool renormalize_normals = true;  // seed 001; off shows the interpolation error
+  bool two_sided = false;           // also draw triangles seen from behind (open meshes)
   bool shadows = false;             // cast shadows through one shadow map per light
   int shadow_map_size = 2048;
   double shadow_bias_texels = 1.5;

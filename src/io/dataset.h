@@ -1,0 +1,66 @@
+// Photometric-stereo dataset directories in the DiLiGenT layout (SPEC.md):
+//   filenames.txt            one image file name per line
+//   light_directions.txt     one "lx ly lz" per line (unit, surface → light, camera frame)
+//   light_intensities.txt    one "r g b" per line (absent = all ones)
+//   mask.png                 nonzero = object (absent = whole image)
+//   Normal_gt.mat / normal.txt   optional ground truth
+//   material.json            optional known coefficients
+// iphong also writes normals.exr, depth.exr, albedo.exr and render.json (how it was rendered).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/scene_file.h"
+#include "reflectance/material.h"
+#include "render/renderer.h"
+
+namespace iphong::io {
+
+// Coefficients from material.json. kd is optional: absent means an unknown per-pixel albedo.
+struct DatasetMaterial {
+  reflectance::Lobe model = reflectance::Lobe::kPhong;
+  Vec3d ambient = Vec3d::Zero();
+  reflectance::Material material;
+  bool kd_known = false;
+};
+
+struct Dataset {
+  std::string directory;
+  std::vector<std::string> filenames;
+  std::vector<ImageF> images;            // linear float RGB, one per light
+  std::vector<Vec3d> light_directions;   // unit
+  std::vector<Vec3d> light_intensities;  // RGB
+  Mask mask;
+  ImageF normal_gt;  // 3 channels; empty when the dataset has none
+  std::optional<DatasetMaterial> material;
+  std::vector<std::string> warnings;  // e.g. light directions that were not unit
+
+  int width() const { return mask.width; }
+  int height() const { return mask.height; }
+};
+
+struct DatasetLoadOptions {
+  bool load_images = true;
+  bool load_ground_truth = true;
+  int threads = 0;
+};
+
+// Reads a dataset directory. Throws std::runtime_error whose one-line message names the file
+// (and the line for text files): missing or short light files, NaN, zero intensities, image
+// count or size mismatches, unreadable images, bad JSON.
+Dataset LoadDataset(const std::string& directory, const DatasetLoadOptions& options = {});
+
+// Writes what `iphong render` produces into `directory`, atomically (the folder appears complete
+// or not at all; an existing one is replaced). With per_light, a DiLiGenT dataset (one image per
+// light); otherwise image.<ext> with all lights. Ground truth either way.
+void WriteRenderOutput(const std::string& directory, const render::Scene& scene,
+                       const render::RenderOptions& options, const render::RenderOutput& output,
+                       const OutputSettings& settings, bool per_light);
+
+// MATLAB files: an H×W×3 double array, as DiLiGenT's Normal_gt.
+void WriteNormalMat(const std::string& path, const std::string& variable, const ImageF& normals);
+ImageF ReadNormalMat(const std::string& path, const std::string& variable);
+
+}  // namespace iphong::io

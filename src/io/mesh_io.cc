@@ -1,0 +1,126 @@
+#include "io/mesh_io.h"
+
+// OpenMesh's IO header must come before the mesh kernel.
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+
+#include <algorithm>
+#include <filesystem>
+#include <stdexcept>
+
+namespace iphong::io {
+namespace fs = std::filesystem;
+namespace {
+
+struct Traits : public OpenMesh::DefaultTraits {
+  using Point = OpenMesh::Vec3d;
+  using Normal = OpenMesh::Vec3d;
+};
+using OmMesh = OpenMesh::TriMesh_ArrayKernelT<Traits>;
+
+}  // namespace
+
+geometry::TriangleMesh LoadMesh(const std::string& path, const MeshLoadOptions& options) {
+  if (!fs::exists(path)) throw std::runtime_error(path + ": no such file");
+  OmMesh om;
+  om.request_vertex_normals();
+  om.request_vertex_texcoords2D();
+  OpenMesh::IO::Options io_options;
+  io_options += OpenMesh::IO::Options::VertexNormal;
+  io_options += OpenMesh::IO::Options::VertexTexCoord;
+  if (!OpenMesh::IO::read_mesh(om, path, io_options)) {
+    throw std::runtime_error(path + ": cannot read the mesh (OBJ, PLY, OFF or STL expected)");
+  }
+  if (om.n_faces() == 0) throw std::runtime_error(path + ": the mesh has no faces");
+  geometry::TriangleMesh mesh;
+  mesh.positions.reserve(om.n_vertices());
+  for (const auto& v : om.vertices()) {
+    const auto& p = om.point(v);
+    mesh.positions.emplace_back(p[0], p[1], p[2]);
+  }
+  for (const auto& f : om.faces()) {
+    Eigen::Vector3i tri;
+    int k = 0;
+    for (const auto& v : om.fv_range(f)) {
+      if (k < 3) tri[k] = v.idx();
+      ++k;
+    }
+    if (k == 3) mesh.triangles.push_back(tri);
+  }
+  if (io_options.check(OpenMesh::IO::Options::VertexTexCoord)) {
+    for (const auto& v : om.vertices()) {
+      const auto& t = om.texcoord2D(v);
+      mesh.uvs.emplace_back(t[0], 1.0 - t[1]);  // files put v = 0 at the bottom
+    }
+  }
+  if (auto m = mesh.Validate(); !m.empty()) throw std::runtime_error(path + ": " + m);
+  bool file_normals =
+      options.use_file_normals && io_options.check(OpenMesh::IO::Options::VertexNormal);
+  if (file_normals) {
+    mesh.corner_normals.reserve(3 * mesh.triangles.size());
+    for (const auto& tri : mesh.triangles) {
+      for (int k = 0; k < 3; ++k) {
+        const auto& n = om.normal(OmMesh::VertexHandle(tri[k]));
+        Vec3d normal(n[0], n[1], n[2]);
+        const double norm = normal.norm();
+        if (!(norm > 0) || !normal.allFinite()) {
+          file_normals = false;  // unusable normals in the file: compute them instead
+          break;
+        }
+        mesh.corner_normals.push_back(normal / norm);
+      }
+      if (!file_normals) break;
+    }
+  }
+  if (!file_normals) geometry::ComputeCornerNormals(mesh, options.crease_angle_deg);
+  return mesh;
+}
+
+void SaveMesh(const std::string& path, const geometry::TriangleMesh& mesh,
+              const std::vector<Vec3f>* vertex_colors) {
+  if (auto m = mesh.Validate(); !m.empty()) throw std::runtime_error(path + ": " + m);
+  if (vertex_colors && vertex_colors->size() != mesh.positions.size()) {
+    throw std::runtime_error(path + ": expected one colour per vertex");
+  }
+  OmMesh om;
+  om.request_vertex_normals();
+  if (vertex_colors) om.request_vertex_colors();
+  std::vector<OmMesh::VertexHandle> handles;
+  handles.reserve(mesh.positions.size());
+  for (const Vec3d& p : mesh.positions) handles.push_back(om.add_vertex({p.x(), p.y(), p.z()}));
+  std::vector<Vec3d> normals(mesh.positions.size(), Vec3d::Zero());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    om.add_face(handles[tri[0]], handles[tri[1]], handles[tri[2]]);
+    for (int k = 0; k < 3; ++k) {
+      if (!mesh.corner_normals.empty()) normals[tri[k]] += mesh.corner_normals[3 * t + k];
+    }
+  }
+  for (std::size_t v = 0; v < normals.size(); ++v) {
+    const Vec3d n = normals[v].norm() > 0 ? normals[v].normalized() : Vec3d(0, 0, 1);
+    om.set_normal(handles[v], {n.x(), n.y(), n.z()});
+    if (vertex_colors) {
+      const Vec3f& c = (*vertex_colors)[v];
+      auto byte = [](float x) {
+        return static_cast<unsigned char>(std::lround(std::clamp(x, 0.0f, 1.0f) * 255));
+      };
+      om.set_color(handles[v], {byte(c[0]), byte(c[1]), byte(c[2])});
+    }
+  }
+  OpenMesh::IO::Options io_options = OpenMesh::IO::Options::VertexNormal;
+  if (vertex_colors) io_options += OpenMesh::IO::Options::VertexColor;
+  const fs::path target(path);
+  if (target.extension() == ".ply") io_options += OpenMesh::IO::Options::Binary;
+  const fs::path temp = target.parent_path() /
+                        ("." + target.stem().string() + ".partial" + target.extension().string());
+  if (!OpenMesh::IO::write_mesh(om, temp.string(), io_options)) {
+    std::error_code ignored;
+    fs::remove(temp, ignored);
+    throw std::runtime_error(path + ": cannot write the mesh");
+  }
+  std::error_code error;
+  fs::rename(temp, target, error);
+  if (error) throw std::runtime_error(path + ": " + error.message());
+}
+
+}  // namespace iphong::io

@@ -1,0 +1,27 @@
+// Mesh files through OpenMesh: OBJ, PLY (ASCII and binary), OFF, STL in; binary PLY or OBJ out.
+// Polygons are triangulated on read.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "geometry/mesh.h"
+
+namespace iphong::io {
+
+struct MeshLoadOptions {
+  // Normals stored in the file are used when present; otherwise (or when this is false) they are
+  // computed by seed 001 with this crease angle.
+  bool use_file_normals = true;
+  double crease_angle_deg = 45.0;
+};
+
+// Throws std::runtime_error naming the file.
+geometry::TriangleMesh LoadMesh(const std::string& path, const MeshLoadOptions& options = {});
+
+// Writes per-vertex normals (the average of each vertex's corner normals) and, when given, one
+// 8-bit colour per vertex (linear [0, 1] values, clamped). PLY is written binary. Atomic.
+void SaveMesh(const std::string& path, const geometry::TriangleMesh& mesh,
+              const std::vector<Vec3f>* vertex_colors = nullptr);
+
+}  // namespace iphong::io
