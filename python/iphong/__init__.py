@@ -18,6 +18,33 @@ from ._core import (  # noqa: F401
     shade,
 )
 
+import json as _json
+import os as _os
+
+from . import _core
+
+
+def render(scene, per_light=False):
+    """Render a scene (a dict in the scene-file format, or the path of a scene JSON file).
+
+    Returns a dict of numpy arrays, nothing written to disk: image (H, W, 3) float32 linear with
+    all lights, images (K, H, W, 3) one per light when per_light, normals (H, W, 3) ground truth
+    (0 outside the mask), depth (H, W), albedo (H, W, 3), mask (H, W) bool, light_directions (K, 3)
+    and light_intensities (K, 3). Relative paths in a dict resolve against the working directory.
+    Raises ValueError naming the field on a bad scene.
+    """
+    if isinstance(scene, dict):
+        return _core._render_json(_json.dumps(scene), "scene", _os.getcwd(), per_light)
+    return _core._render_file(_os.fspath(scene), per_light)
+
+
+def load_dataset(directory):
+    """Read a dataset directory (DiLiGenT layout) into numpy arrays; see _core.load_dataset."""
+    return _core.load_dataset(_os.fspath(directory))
+
+
+load_dataset.__doc__ = _core.load_dataset.__doc__
+
 #: Every named material preset, by name (seed 000's Phong table and seed 004's tutorial table).
 materials = {preset.name: preset.material for preset in material_presets()}
 
@@ -28,8 +55,10 @@ __all__ = [
     "Material",
     "MaterialPreset",
     "PointLight",
+    "load_dataset",
     "material",
     "material_presets",
     "materials",
+    "render",
     "shade",
 ]

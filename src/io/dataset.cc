@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -39,10 +40,18 @@ std::vector<Vec3d> ReadTriples(const fs::path& path, std::size_t expected) {
   const auto lines = ReadLines(path);
   std::vector<Vec3d> triples;
   for (const auto& [number, line] : lines) {
-    std::istringstream in(line);
+    // strtod, unlike operator>>, reads "nan" and "inf", so they get their own message.
     Vec3d v;
-    std::string extra;
-    if (!(in >> v[0] >> v[1] >> v[2]) || (in >> extra)) {
+    const char* p = line.c_str();
+    int count = 0;
+    for (; count < 4; ++count) {
+      char* end = nullptr;
+      const double value = std::strtod(p, &end);
+      if (end == p) break;
+      if (count < 3) v[count] = value;
+      p = end;
+    }
+    if (count != 3 || std::string(p).find_first_not_of(" \t") != std::string::npos) {
       Fail(path, "expected 3 numbers, got '" + line + "'", number);
     }
     if (!v.allFinite()) Fail(path, "not a finite number", number);

@@ -18,10 +18,14 @@ struct Traits : public OpenMesh::DefaultTraits {
 };
 using OmMesh = OpenMesh::TriMesh_ArrayKernelT<Traits>;
 
+// OpenMesh narrates every write on its info log; errors still go to its error log.
+void QuietOpenMeshInfoLog() { omlog().disable(); }
+
 }  // namespace
 
 geometry::TriangleMesh LoadMesh(const std::string& path, const MeshLoadOptions& options) {
   if (!fs::exists(path)) throw std::runtime_error(path + ": no such file");
+  QuietOpenMeshInfoLog();
   OmMesh om;
   om.request_vertex_normals();
   om.request_vertex_texcoords2D();
@@ -82,6 +86,7 @@ void SaveMesh(const std::string& path, const geometry::TriangleMesh& mesh,
   if (vertex_colors && vertex_colors->size() != mesh.positions.size()) {
     throw std::runtime_error(path + ": expected one colour per vertex");
   }
+  QuietOpenMeshInfoLog();
   OmMesh om;
   om.request_vertex_normals();
   if (vertex_colors) om.request_vertex_colors();

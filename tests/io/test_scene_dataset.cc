@@ -1,0 +1,290 @@
+// Scene files, datasets and meshes on disk: round trips and one-line errors naming the file.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "geometry/primitives.h"
+#include "io/dataset.h"
+#include "io/mesh_io.h"
+#include "io/scene_file.h"
+
+namespace iphong::io {
+namespace {
+namespace fs = std::filesystem;
+
+class TempDir : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ =
+        fs::temp_directory_path() /
+        ("iphong-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  void Write(const std::string& name, const std::string& text) const {
+    std::ofstream(dir_ / name) << text;
+  }
+  fs::path dir_;
+};
+
+std::string ErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+const char* kMinimalScene = R"({"width": 32, "height": 24,
+  "lights": [{"type": "directional", "direction": [0, 0, 1]}],
+  "objects": [{"shape": "sphere", "radius": 0.5, "subdivisions": 2}]})";
+
+TEST_F(TempDir, ParsesTheIssueSceneFixture) {
+  const SceneFile f = LoadSceneFile(IPHONG_FIXTURES_DIR "/scenes/issue3_sphere.json");
+  EXPECT_EQ(f.scene.camera.width, 256);
+  EXPECT_EQ(f.scene.camera.extent, 2.0);
+  ASSERT_EQ(f.scene.lighting.lights.size(), 1u);
+  EXPECT_NEAR(f.scene.lighting.lights[0].direction_cam.norm(), 1.0, 1e-12);
+  ASSERT_EQ(f.scene.objects.size(), 1u);
+  EXPECT_EQ(f.scene.objects[0].mesh.triangle_count(), 81920u);
+  EXPECT_EQ(f.scene.objects[0].material.kd, Vec3d(0.9, 0.2, 0.1));
+  EXPECT_EQ(f.options.shading, render::Shading::kPhong);
+  EXPECT_EQ(f.output.format, "exr");
+}
+
+TEST_F(TempDir, SceneErrorsNameTheFileAndTheField) {
+  auto error = [&](const std::string& text) {
+    Write("scene.json", text);
+    return ErrorOf([&] { LoadSceneFile(Path("scene.json")); });
+  };
+  const std::string file = Path("scene.json") + ": ";
+  EXPECT_EQ(error(R"({"lights": [{"direction": [0,0,1]}], "objects": [{"shape": "cone"}]})"),
+            file +
+                "objects[0].shape: unknown shape 'cone' (expected sphere, cylinder, torus, "
+                "plane, box, heightfield, mesh)");
+  EXPECT_EQ(error(R"({"objects": [{"shape": "sphere"}]})"), file + "missing field 'lights'");
+  EXPECT_EQ(
+      error(
+          R"({"lights": [{"direction": [0,0,1]}], "objects": [{"shape": "sphere", "raduis": 1}]})"),
+      file + "objects[0]: unknown field 'raduis'");
+  EXPECT_EQ(
+      error(
+          R"({"lights": [{"direction": [0,0,1]}], "objects": [{"shape": "sphere", "radius": -1}]})"),
+      file + "objects[0].radius: expected a number > 0");
+  EXPECT_EQ(error(R"({"lights": [{"direction": [0,0]}], "objects": [{"shape": "sphere"}]})"),
+            file + "lights[0].direction: expected 3 numbers");
+  EXPECT_EQ(error(R"({"lights": [{"direction": [0,0,0]}], "objects": [{"shape": "sphere"}]})"),
+            file + "lights[0]: light direction must be finite and non-zero, got [0, 0, 0]");
+  EXPECT_EQ(
+      error(
+          R"({"lights": [{"direction": [0,0,1]}], "objects": [{"shape": "sphere", "material": "unobtainium"}]})")
+          .rfind(file + "objects[0].material: unknown material preset 'unobtainium'", 0),
+      0u);
+  // NaN is not JSON: a syntax error with its line and column.
+  EXPECT_NE(error("{\"lights\": [{\"direction\": [0, 0, 1]}],\n \"objects\": [{\"radius\": NaN}]}")
+                .find("parse error at line 2, column"),
+            std::string::npos);
+  EXPECT_EQ(ErrorOf([&] { LoadSceneFile(Path("absent.json")); }),
+            Path("absent.json") + ": cannot open");
+}
+
+TEST_F(TempDir, LightSetsRingAndHemisphere) {
+  const SceneFile ring =
+      ParseScene(R"({"lights": [{"type": "ring", "count": 12, "elevation_deg": 30}],
+    "objects": [{"shape": "plane"}]})",
+                 "ring", "");
+  ASSERT_EQ(ring.scene.lighting.lights.size(), 12u);
+  for (const auto& l : ring.scene.lighting.lights) EXPECT_NEAR(l.direction_cam.z(), 0.5, 1e-12);
+  EXPECT_NEAR(ring.scene.lighting.lights[3].direction_cam.y(), std::cos(M_PI / 6), 1e-12);
+  const SceneFile hemi =
+      ParseScene(R"({"lights": [{"type": "hemisphere", "count": 96, "min_elevation_deg": 30}],
+    "objects": [{"shape": "plane"}]})",
+                 "hemi", "");
+  ASSERT_EQ(hemi.scene.lighting.lights.size(), 96u);
+  Vec3d mean = Vec3d::Zero();
+  for (const auto& l : hemi.scene.lighting.lights) {
+    EXPECT_GE(l.direction_cam.z(), 0.5 - 1e-12);
+    mean += l.direction_cam / 96;
+  }
+  EXPECT_LT(std::hypot(mean.x(), mean.y()), 0.02);  // spread evenly around the view axis
+}
+
+TEST_F(TempDir, PerLightDatasetRoundTrip) {
+  SceneFile f = ParseScene(R"({"width": 48, "height": 40, "ambient": 0.5,
+    "lights": [{"type": "ring", "count": 5, "elevation_deg": 50, "intensity": [1, 0.9, 0.8]}],
+    "objects": [{"shape": "torus", "ring_radius": 0.55, "tube_radius": 0.3,
+                 "material": {"preset": "jade", "kd": [0.4, 0.5, 0.6]}}]})",
+                           "torus", "");
+  const render::RenderOutput out = render::Render(f.scene, f.options, true);
+  for (const std::string format : {"exr", "png"}) {
+    f.output.format = format;
+    WriteRenderOutput(Path("set-" + format), f.scene, f.options, out, f.output, true);
+    const Dataset d = LoadDataset(Path("set-" + format));
+    ASSERT_EQ(d.images.size(), 5u);
+    EXPECT_EQ(d.filenames[0], "001." + format);
+    for (std::size_t j = 0; j < 5; ++j) {
+      EXPECT_TRUE(d.light_directions[j].isApprox(f.scene.lighting.lights[j].direction_cam, 1e-8));
+      EXPECT_TRUE(d.light_intensities[j].isApprox(Vec3d(1, 0.9, 0.8), 1e-8));
+      const double tolerance = format == "exr" ? 0.0 : 0.5 / 65535 + 1e-7;
+      for (std::size_t i = 0; i < out.per_light[j].pixels.size(); ++i) {
+        ASSERT_NEAR(d.images[j].pixels[i], std::clamp(out.per_light[j].pixels[i], 0.0f, 1.0f),
+                    tolerance);
+      }
+    }
+    EXPECT_EQ(d.mask.inside, out.mask.inside);
+    EXPECT_EQ(d.normal_gt.pixels, out.normal_cam.pixels);  // float -> double .mat -> float
+    ASSERT_TRUE(d.material.has_value());
+    EXPECT_EQ(d.material->material.ks, Vec3d::Constant(0.32));
+    EXPECT_EQ(d.material->material.shininess, 12.8);
+    EXPECT_EQ(d.material->ambient, Vec3d::Constant(0.5));
+    EXPECT_TRUE(d.material->kd_known);
+    EXPECT_TRUE(d.warnings.empty());
+  }
+}
+
+TEST_F(TempDir, WritingReplacesAtomicallyAndFailsCleanly) {
+  SceneFile f = ParseScene(kMinimalScene, "minimal", "");
+  const render::RenderOutput out = render::Render(f.scene, f.options, true);
+  fs::create_directories(Path("out"));
+  Write("out/stale.txt", "old");
+  WriteRenderOutput(Path("out"), f.scene, f.options, out, f.output, false);
+  EXPECT_FALSE(fs::exists(Path("out/stale.txt")));
+  EXPECT_TRUE(fs::exists(Path("out/image.exr")));
+  // A point light cannot go into the DiLiGenT layout: clear error, nothing written.
+  f.scene.lighting.lights.push_back(reflectance::Light::Point(Vec3d(0, 0, 3), Vec3d::Ones(), true));
+  EXPECT_NE(ErrorOf([&] {
+              WriteRenderOutput(Path("pl"), f.scene, f.options, out, f.output, true);
+            }).find("point light"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(Path("pl")));
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos);
+  }
+}
+
+class BadDataset : public TempDir {
+ protected:
+  void SetUp() override {
+    TempDir::SetUp();
+    SceneFile f = ParseScene(kMinimalScene, "minimal", "");
+    f.scene.lighting.lights.push_back(
+        reflectance::Light::Directional(Vec3d(0.5, 0, 1), Vec3d::Ones()));
+    const render::RenderOutput out = render::Render(f.scene, f.options, true);
+    f.output.format = "png";
+    WriteRenderOutput(Path("d"), f.scene, f.options, out, f.output, true);
+  }
+  std::string LoadError() const {
+    return ErrorOf([&] { LoadDataset(Path("d")); });
+  }
+};
+
+TEST_F(BadDataset, ShortLightFileNamesTheFile) {
+  Write("d/light_directions.txt", "0 0 1\n");
+  EXPECT_EQ(LoadError(),
+            Path("d/light_directions.txt") + ": has 1 lines for 2 images in filenames.txt");
+}
+
+TEST_F(BadDataset, NanInLightFileNamesTheLine) {
+  Write("d/light_directions.txt", "0 0 1\nnan 0 1\n");
+  EXPECT_EQ(LoadError(), Path("d/light_directions.txt") + ":2: not a finite number");
+  Write("d/light_directions.txt", "0 0 1\n0 1\n");
+  EXPECT_EQ(LoadError(), Path("d/light_directions.txt") + ":2: expected 3 numbers, got '0 1'");
+}
+
+TEST_F(BadDataset, ZeroIntensityIsAnError) {
+  Write("d/light_intensities.txt", "1 1 1\n1 0 1\n");
+  EXPECT_EQ(LoadError(), Path("d/light_intensities.txt") + ":2: light intensities must be > 0");
+}
+
+TEST_F(BadDataset, UnnormalizedDirectionsAreNormalizedWithAWarning) {
+  Write("d/light_directions.txt", "0 0 2\n0.5 0 1\n");
+  const Dataset d = LoadDataset(Path("d"));
+  EXPECT_TRUE(d.light_directions[0].isApprox(Vec3d(0, 0, 1)));
+  EXPECT_EQ(d.warnings.size(), 2u);
+}
+
+TEST_F(BadDataset, MissingOrCorruptImageNamesIt) {
+  fs::remove(Path("d/002.png"));
+  EXPECT_NE(LoadError().find("002.png"), std::string::npos);
+  Write("d/002.png", "\x89PNG\r\n\x1a\n garbage");
+  EXPECT_NE(LoadError().find("002.png"), std::string::npos);
+}
+
+TEST_F(BadDataset, SizeMismatchNamesTheFile) {
+  fs::copy_file(Path("d/normals.png"), Path("d/mask.png"), fs::copy_options::overwrite_existing);
+  EXPECT_EQ(LoadError().find(Path("d/mask.png")), std::string::npos);  // same size: fine
+  ImageF small(8, 8, 3, 0.5f);
+  WriteImage(Path("d/002.png"), small, {16, Encoding::kLinear});
+  EXPECT_EQ(LoadError(), Path("d/002.png") + ": is 8x8, but 001.png is 32x24");
+}
+
+TEST_F(BadDataset, BadMaterialJsonNamesTheField) {
+  Write("d/material.json", R"({"model": "phong", "ks": [0.1, -0.2, 0.1]})");
+  EXPECT_EQ(LoadError(),
+            Path("d/material.json") +
+                ": material ks must be finite and >= 0 in every channel, got [0.1, -0.2, 0.1]");
+  Write("d/material.json", "{\"model\": \"phong\",\n \"ks\": }");
+  EXPECT_NE(LoadError().find(Path("d/material.json") + ": parse error at line 2"),
+            std::string::npos);
+}
+
+TEST_F(TempDir, MeshSaveLoadRoundTrip) {
+  const geometry::TriangleMesh sphere = geometry::MakeSphere(0.7, 3);
+  std::vector<Vec3f> colors(sphere.positions.size(), Vec3f(0.2f, 0.4f, 0.6f));
+  SaveMesh(Path("sphere.ply"), sphere, &colors);
+  SaveMesh(Path("sphere.obj"), sphere);
+  for (const std::string name : {"sphere.ply", "sphere.obj"}) {
+    const geometry::TriangleMesh back = LoadMesh(Path(name));
+    ASSERT_EQ(back.positions.size(), sphere.positions.size()) << name;
+    ASSERT_EQ(back.triangles.size(), sphere.triangles.size()) << name;
+    for (std::size_t v = 0; v < sphere.positions.size(); ++v) {
+      ASSERT_LT((back.positions[v] - sphere.positions[v]).norm(), 1e-5);
+    }
+    for (std::size_t t = 0; t < back.triangles.size(); ++t) {
+      EXPECT_GT(back.corner_normals[3 * t].dot(sphere.corner_normals[3 * t]), 0.999);
+    }
+  }
+  // Binary PLY, as promised.
+  std::ifstream ply(Path("sphere.ply"), std::ios::binary);
+  std::string header((std::istreambuf_iterator<char>(ply)), {});
+  EXPECT_NE(header.find("format binary_little_endian"), std::string::npos);
+  EXPECT_NE(header.find("property uchar red"), std::string::npos);
+  EXPECT_EQ(ErrorOf([&] { LoadMesh(Path("none.obj")); }), Path("none.obj") + ": no such file");
+}
+
+// The real DiLiGenT data beside the checkout (skipped when absent).
+std::string SharedData() {
+  const char* env = std::getenv("IPHONG_DATA_DIR");
+  return env ? env : IPHONG_SOURCE_DIR "/../shared/data";
+}
+
+TEST(RealData, LoadsDiligentCrop8Ball) {
+  const std::string dir = SharedData() + "/diligent-crop8/ball";
+  if (!fs::exists(dir)) GTEST_SKIP() << "no real data at " << dir << " (set IPHONG_DATA_DIR)";
+  const Dataset d = LoadDataset(dir);
+  ASSERT_EQ(d.images.size(), 96u);
+  EXPECT_EQ(d.width(), 172);
+  EXPECT_EQ(d.height(), 172);
+  ASSERT_EQ(d.normal_gt.width, 172);
+  std::size_t inside = 0;
+  for (std::size_t p = 0; p < d.mask.inside.size(); ++p) {
+    if (!d.mask.inside[p]) continue;
+    ++inside;
+    const float* n = d.normal_gt.pixels.data() + 3 * p;
+    ASSERT_NEAR(n[0] * n[0] + n[1] * n[1] + n[2] * n[2], 1.0, 1e-3);
+  }
+  EXPECT_GT(inside, 10000u);
+  // The SPEC frame: at the top of the ball (small rows) the normals point up (+y).
+  const float* top = d.normal_gt.pixels.data() + 3 * (30 * 172 + 86);
+  EXPECT_GT(top[1], 0.5f);
+  for (const Vec3d& l : d.light_directions) EXPECT_GT(l.z(), 0);
+}
+
+}  // namespace
+}  // namespace iphong::io
