@@ -17,7 +17,7 @@ nlohmann::json JsonReader::Parse(const std::string& text, const std::string& fil
 }
 
 void JsonReader::Fail(const std::string& message) const {
-  throw std::runtime_error(where() + ": " + message);
+  throw JsonError(where() + ": " + message);
 }
 
 bool JsonReader::Has(const std::string& key) const {

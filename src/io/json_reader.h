@@ -11,6 +11,11 @@
 
 namespace iphong::io {
 
+// An error already located in a JSON document ("file: path: message").
+struct JsonError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 class JsonReader {
  public:
   JsonReader(const nlohmann::json& value, std::string file, std::string path = "")

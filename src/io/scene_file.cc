@@ -216,7 +216,9 @@ render::SceneObject ParseObject(const JsonReader& j, const std::string& base_dir
       j.Field("shape").Fail("unknown shape '" + shape +
                             "' (expected sphere, cylinder, torus, plane, box, heightfield, mesh)");
     }
-  } catch (const std::invalid_argument& e) {
+  } catch (const JsonError&) {
+    throw;
+  } catch (const std::exception& e) {  // bad parameters, unreadable mesh or height image
     j.Fail(e.what());
   }
   j.OnlyKeys(keys);
@@ -224,7 +226,14 @@ render::SceneObject ParseObject(const JsonReader& j, const std::string& base_dir
   object.material = j.Has("material") ? ParseMaterial(j.Field("material"))
                                       : reflectance::FindMaterialPreset("plastic").material;
   if (j.Has("albedo_texture")) {
-    object.albedo_texture = ReadImage(Resolve(base_dir, j.Field("albedo_texture").String()));
+    const JsonReader texture = j.Field("albedo_texture");
+    try {
+      object.albedo_texture = ReadImage(Resolve(base_dir, texture.String()));
+    } catch (const JsonError&) {
+      throw;
+    } catch (const std::exception& e) {
+      texture.Fail(e.what());
+    }
     if (object.mesh.uvs.empty()) j.Fail("albedo_texture needs a shape with uv coordinates");
   }
   return object;

@@ -288,3 +288,94 @@ TEST(RealData, LoadsDiligentCrop8Ball) {
 
 }  // namespace
 }  // namespace iphong::io
+
+namespace iphong::io {
+namespace {
+
+TEST_F(TempDir, AlbedoTextureModulatesKdThroughUv) {
+  // A 2x1 texture: left half white, right half 0.25. On a plane seen head-on, uv runs with x.
+  ImageF texture(2, 1, 3);
+  for (int c = 0; c < 3; ++c) {
+    texture.at(0, 0)[c] = 1.0f;
+    texture.at(1, 0)[c] = 0.25f;
+  }
+  WriteImage(Path("tex.exr"), texture);
+  const SceneFile f = ParseScene(R"({"width": 40, "height": 40,
+    "lights": [{"direction": [0, 0, 1]}],
+    "objects": [{"shape": "plane", "size": 2, "material": {"kd": 0.8, "ks": 0},
+                 "albedo_texture": "tex.exr"}]})",
+                                 "tex", dir_.string());
+  const render::RenderOutput out = render::Render(f.scene, f.options, false);
+  // Bilinear lookup with wrap-around: column c sees u = (c + 0.5)/40, texel x = 2u − 0.5.
+  auto expected = [](int col) {
+    const double x = 2 * (col + 0.5) / 40 - 0.5;
+    const int x0 = static_cast<int>(std::floor(x));
+    const double f = x - x0;
+    auto texel = [](int i) { return ((i % 2) + 2) % 2 == 0 ? 1.0 : 0.25; };
+    return 0.8 * ((1 - f) * texel(x0) + f * texel(x0 + 1));
+  };
+  for (int col : {3, 10, 19, 30, 37}) {
+    EXPECT_NEAR(out.albedo.at(col, 20)[0], expected(col), 1e-6) << "column " << col;
+    EXPECT_NEAR(out.image.at(col, 20)[0], expected(col), 1e-6);  // light along the normal
+  }
+  EXPECT_NEAR(out.albedo.at(10, 20)[0], 0.785, 1e-6);
+  EXPECT_NE(ErrorOf([&] {
+              ParseScene(R"({"lights": [{"direction": [0, 0, 1]}],
+                "objects": [{"shape": "box", "albedo_texture": "tex.exr"}]})",
+                         "box", dir_.string());
+            }).find("needs a shape with uv coordinates"),
+            std::string::npos);
+}
+
+TEST_F(TempDir, HeightFieldFromAnImage) {
+  ImageF heights(3, 3, 1);
+  heights.pixels = {0, 0, 0, 0, 1, 0, 0, 0, 0};  // a spike in the middle
+  WriteImage(Path("h.exr"), heights);
+  const SceneFile f = ParseScene(R"({"lights": [{"direction": [0, 0, 1]}],
+    "objects": [{"shape": "heightfield", "image": "h.exr", "scale": 0.5, "size": [2, 2]}]})",
+                                 "hf", dir_.string());
+  const auto& mesh = f.scene.objects[0].mesh;
+  ASSERT_EQ(mesh.positions.size(), 9u);
+  EXPECT_DOUBLE_EQ(mesh.positions[4].z(), 0.5);
+  EXPECT_DOUBLE_EQ(mesh.positions[0].z(), 0.0);
+}
+
+TEST_F(TempDir, MeshFileInASceneUsesItsNormalsAndTransform) {
+  geometry::TriangleMesh sphere = geometry::MakeSphere(1.0, 3);
+  SaveMesh(Path("ball.ply"), sphere);
+  const SceneFile f =
+      ParseScene(R"({"width": 64, "height": 64, "lights": [{"direction": [0, 0, 1]}],
+    "objects": [{"shape": "mesh", "path": "ball.ply", "transform": {"scale": 0.5, "translate": [0.25, 0, 0]}}]})",
+                 "mesh", dir_.string());
+  const auto& mesh = f.scene.objects[0].mesh;
+  for (std::size_t v = 0; v < mesh.positions.size(); v += 17) {
+    EXPECT_NEAR((mesh.positions[v] - Vec3d(0.25, 0, 0)).norm(), 0.5, 1e-5);
+  }
+  EXPECT_EQ(
+      ErrorOf([&] {
+        ParseScene(
+            R"({"lights": [{"direction": [0, 0, 1]}], "objects": [{"shape": "mesh", "path": "nope.obj"}]})",
+            "m", dir_.string());
+      }),
+      "m: objects[0]: " + Path("nope.obj") + ": no such file");
+}
+
+TEST(Noise, ShotNoiseVarianceFollowsTheSignal) {
+  // Poisson: variance = value / photons, so the noise grows with the signal.
+  render::NoiseOptions noise;
+  noise.shot_photons = 1000;
+  for (float level : {0.1f, 0.4f}) {
+    ImageF image(300, 300, 1, level);
+    render::ApplyNoise(image, noise, 0);
+    double mean = 0, var = 0;
+    for (float v : image.pixels) mean += v;
+    mean /= image.pixels.size();
+    for (float v : image.pixels) var += (v - mean) * (v - mean);
+    var /= image.pixels.size();
+    EXPECT_NEAR(mean, level, 3e-4);
+    EXPECT_NEAR(var, level / 1000.0, 0.05 * level / 1000.0);
+  }
+}
+
+}  // namespace
+}  // namespace iphong::io
