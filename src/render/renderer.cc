@@ -148,6 +148,13 @@ struct PointShader {
   Vec3T<T> Shade(const SceneObject& object, const Vec3d& normal, const Vec3d& position,
                  const Vec3d& albedo, int only_light) const {
     reflectance::MaterialT<T> material = reflectance::CastMaterial<T>(object.material);
+    return Shade<T>(material, normal, position, albedo, only_light);
+  }
+
+  // With the object's material already in T (the per-pixel path converts it once per object).
+  template <typename T>
+  Vec3T<T> Shade(reflectance::MaterialT<T> material, const Vec3d& normal, const Vec3d& position,
+                 const Vec3d& albedo, int only_light) const {
     material.kd = albedo.cast<T>();
     const Vec3T<T> n = normal.cast<T>();
     const Vec3T<T> view = camera.ViewDirection(position).cast<T>();
@@ -358,6 +365,10 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
 
   const auto shade_start = Clock::now();
   const PointShader shade{scene, camera, options, shadows};
+  std::vector<reflectance::MaterialT<float>> materials_f;
+  for (const SceneObject& object : scene.objects) {
+    materials_f.push_back(reflectance::CastMaterial<float>(object.material));
+  }
   const std::size_t pixels = static_cast<std::size_t>(camera.width) * camera.height;
   const int lights = static_cast<int>(scene.lighting.lights.size());
 
