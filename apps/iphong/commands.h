@@ -9,11 +9,13 @@ namespace iphong::cli {
 void AddDemoCommand(CLI::App& app);
 void AddMaterialsCommand(CLI::App& app);
 void AddRenderCommand(CLI::App& app);
+void AddNormalsCommand(CLI::App& app);  // normals and eval
 
 // Every subcommand, in the order `iphong --help` lists them. New commands are added here only.
 inline void AddAllCommands(CLI::App& app) {
   AddDemoCommand(app);
   AddRenderCommand(app);
+  AddNormalsCommand(app);
   AddMaterialsCommand(app);
 }
 

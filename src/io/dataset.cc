@@ -1,7 +1,6 @@
 #include "io/dataset.h"
 
 #include <matio.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -12,6 +11,8 @@
 
 #include "core/parallel.h"
 #include "io/json_reader.h"
+#include "io/staging.h"
+#include "io/visualize.h"
 
 namespace iphong::io {
 namespace fs = std::filesystem;
@@ -117,9 +118,7 @@ DatasetMaterial ParseMaterialJson(const fs::path& path) {
 }
 
 void WriteText(const fs::path& path, const std::string& text) {
-  std::ofstream file(path);
-  file << text;
-  if (!file) Fail(path, "cannot write");
+  WriteTextFile(path.string(), text);
 }
 
 std::string Triples(const std::vector<Vec3d>& values) {
@@ -136,16 +135,6 @@ ImageF MaskImage(const Mask& mask) {
   ImageF image(mask.width, mask.height, 1);
   for (std::size_t p = 0; p < mask.inside.size(); ++p) image.pixels[p] = mask.inside[p] ? 1.0f : 0;
   return image;
-}
-
-// (n + 1)/2, the usual normal-map picture (OpenGL convention: green = +y up), 0 outside.
-ImageF NormalPicture(const ImageF& normals, const Mask& mask) {
-  ImageF picture(normals.width, normals.height, 3);
-  for (std::size_t p = 0; p < mask.inside.size(); ++p) {
-    if (!mask.inside[p]) continue;
-    for (int c = 0; c < 3; ++c) picture.pixels[3 * p + c] = 0.5f * (normals.pixels[3 * p + c] + 1);
-  }
-  return picture;
 }
 
 nlohmann::json MaterialJson(const render::Scene& scene, const render::RenderOptions& options) {
@@ -169,23 +158,6 @@ nlohmann::json MaterialJson(const render::Scene& scene, const render::RenderOpti
   j["shininess"] = first.material.shininess;
   if (kd_uniform) j["kd"] = rgb(first.material.kd);
   return j;
-}
-
-// Replaces `target` by the finished `temp` folder.
-void MoveIntoPlace(const fs::path& temp, const fs::path& target) {
-  std::error_code error;
-  fs::path old;
-  if (fs::exists(target)) {
-    old = target.string() + ".old-" + std::to_string(::getpid());
-    fs::rename(target, old, error);
-    if (error) Fail(target, "cannot replace the existing folder: " + error.message());
-  }
-  fs::rename(temp, target, error);
-  if (error) {
-    if (!old.empty()) fs::rename(old, target, error);
-    Fail(target, "cannot move the finished output into place");
-  }
-  if (!old.empty()) fs::remove_all(old, error);
 }
 
 }  // namespace
@@ -360,17 +332,9 @@ void WriteRenderOutput(const std::string& directory, const render::Scene& scene,
       }
     }
   }
-  const fs::path target = fs::absolute(directory).lexically_normal();
-  const fs::path parent = target.parent_path();
-  std::error_code error;
-  fs::create_directories(parent, error);
-  if (error) Fail(parent, "cannot create: " + error.message());
-  const fs::path temp =
-      parent / ("." + target.filename().string() + ".partial-" + std::to_string(::getpid()));
-  fs::remove_all(temp, error);
-  fs::create_directory(temp, error);
-  if (error) Fail(temp, "cannot create: " + error.message());
-  try {
+  StagingDirectory staging(directory);
+  const fs::path temp = staging.file("");
+  {
     const std::string ext = settings.extension();
     const WriteOptions image_options = settings.write_options();
     if (per_light) {
@@ -393,7 +357,7 @@ void WriteRenderOutput(const std::string& directory, const render::Scene& scene,
     }
     WriteImage((temp / "mask.png").string(), MaskImage(output.mask), {8, Encoding::kLinear});
     WriteImage((temp / "normals.exr").string(), output.normal_cam);
-    WriteImage((temp / "normals.png").string(), NormalPicture(output.normal_cam, output.mask),
+    WriteImage((temp / "normals.png").string(), NormalMapPicture(output.normal_cam, output.mask),
                {16, Encoding::kLinear});
     WriteImage((temp / "depth.exr").string(), output.depth);
     WriteImage((temp / "albedo.exr").string(), output.albedo);
@@ -418,11 +382,8 @@ void WriteRenderOutput(const std::string& directory, const render::Scene& scene,
                      {"quantization_bits", options.noise.quantization_bits},
                      {"seed", options.noise.seed}};
     WriteText(temp / "render.json", meta.dump(2) + "\n");
-  } catch (...) {
-    fs::remove_all(temp, error);
-    throw;
   }
-  MoveIntoPlace(temp, target);
+  staging.Commit();
 }
 
 }  // namespace iphong::io

@@ -1,0 +1,256 @@
+// `iphong normals DATASET -o DIR`: per-pixel normals and albedo by inverting the Phong model;
+// with ground truth, the angular errors. `iphong eval EST.exr GT`: the same metrics for any map.
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "io/dataset.h"
+#include "io/image_io.h"
+#include "io/staging.h"
+#include "io/visualize.h"
+#include "iphong/commands.h"
+#include "solve/metrics.h"
+#include "solve/normals.h"
+
+namespace iphong::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+struct NormalsCommandOptions {
+  std::string dataset;
+  std::string output_dir;
+  std::optional<std::string> model;
+  bool ignore_material = false;
+  double discard_dark = 0.3, discard_bright = 0.1;
+  std::string convention = "opengl";
+  double robust_scale = solve::NormalOptions{}.robust_scale;
+  int irls_rounds = solve::NormalOptions{}.irls_rounds;
+  int threads = 0;
+};
+
+nlohmann::json MetricsJson(const solve::AngularErrorMetrics& m) {
+  return {{"evaluated_pixels", m.pixels},
+          {"mean_angular_error_deg", m.mean_deg},
+          {"median_angular_error_deg", m.median_deg},
+          {"fraction_below_5_deg", m.below_5_deg},
+          {"fraction_below_10_deg", m.below_10_deg},
+          {"fraction_below_20_deg", m.below_20_deg}};
+}
+
+double ErrorScale(const solve::AngularErrorMetrics& m) {
+  return m.mean_deg < 5 ? 10 : m.mean_deg < 12 ? 30 : 60;
+}
+
+void RunNormals(const NormalsCommandOptions& o) {
+  const auto total_start = Clock::now();
+  const bool tty = ::isatty(2);
+  io::Dataset dataset = io::LoadDataset(o.dataset);
+  for (const std::string& warning : dataset.warnings) {
+    std::fprintf(stderr, "iphong: warning: %s\n", warning.c_str());
+  }
+  solve::NormalOptions options;
+  options.discard_dark = o.discard_dark;
+  options.discard_bright = o.discard_bright;
+  options.threads = o.threads;
+  options.robust_scale = o.robust_scale;
+  options.irls_rounds = o.irls_rounds;
+  if (dataset.material && !o.ignore_material) {
+    options.model = dataset.material->model;
+    options.material_known = true;
+    options.ambient_term = dataset.material->ambient.cwiseProduct(dataset.material->material.ka);
+    options.ks = dataset.material->material.ks;
+    options.shininess = dataset.material->material.shininess;
+  }
+  if (o.model) options.model = reflectance::ParseLobe(*o.model);
+  if (tty) {
+    options.progress = [](double fraction) {
+      std::fprintf(stderr, "\rsolving normals: %3.0f%%", 100 * fraction);
+    };
+  }
+
+  std::vector<const float*> images;
+  for (const ImageF& image : dataset.images) images.push_back(image.pixels.data());
+  solve::PhotometricData data =
+      solve::GatherObservations(images, dataset.width(), dataset.height(), dataset.mask,
+                                dataset.light_directions, dataset.light_intensities);
+  dataset.images.clear();  // keep only the masked observations
+  dataset.images.shrink_to_fit();
+  const double load_seconds = Seconds(total_start);
+
+  const solve::NormalResult result = solve::EstimateNormals(data, options);
+  if (tty) std::fprintf(stderr, "\r%30s\r", "");
+
+  nlohmann::json metrics;
+  metrics["dataset"] = o.dataset;
+  metrics["pixels"] = data.pixel_count();
+  metrics["images"] = data.images;
+  metrics["model"] = reflectance::LobeName(options.model);
+  metrics["load_seconds"] = load_seconds;
+  metrics["init_seconds"] = result.summary.init_seconds;
+  metrics["specular_seconds"] = result.summary.specular_seconds;
+  metrics["solve_seconds"] = result.summary.solve_seconds;
+  metrics["iterations"] = result.summary.iterations;
+  metrics["dark_pixels"] = result.summary.dark_pixels;
+  metrics["underdetermined_pixels"] = result.summary.underdetermined_pixels;
+  metrics["material"] = options.material_known                         ? "known (material.json)"
+                        : options.model == reflectance::Lobe::kLambert ? "lambertian"
+                        : result.material_estimated                    ? "estimated"
+                                                                       : "not identifiable";
+  if (!result.specular_note.empty()) metrics["specular_note"] = result.specular_note;
+  std::optional<solve::AngularErrorMetrics> errors;
+  if (!dataset.normal_gt.pixels.empty()) {
+    errors = solve::CompareNormals(result.normals, dataset.normal_gt, dataset.mask);
+    metrics.update(MetricsJson(*errors));
+  }
+
+  io::StagingDirectory out(o.output_dir);
+  io::WriteImage(out.file("normals.exr"), result.normals);
+  io::WriteImage(out.file("normals.png"),
+                 io::NormalMapPicture(result.normals, dataset.mask, o.convention == "directx"),
+                 {16, io::Encoding::kLinear});
+  io::WriteImage(out.file("albedo.exr"), result.albedo);
+  io::WriteImage(out.file("residual.exr"), result.residual);
+  if (result.material_estimated) {
+    const nlohmann::json material = {
+        {"model", reflectance::LobeName(options.model)},
+        {"ks", {result.ks[0], result.ks[1], result.ks[2]}},
+        {"shininess", result.shininess},
+        {"ambient", {1, 1, 1}},
+        {"ka", {result.ambient_term[0], result.ambient_term[1], result.ambient_term[2]}},
+        {"comment", "estimated by iphong normals: " + result.specular_note}};
+    io::WriteTextFile(out.file("material.json"), material.dump(2) + "\n");
+  }
+  if (errors)
+    io::WriteErrorMap(out.file("error.png"), errors->error_deg, dataset.mask, ErrorScale(*errors));
+  metrics["total_seconds"] = Seconds(total_start);
+  io::WriteTextFile(out.file("metrics.json"), metrics.dump(2) + "\n");
+  out.Commit();
+
+  std::printf(
+      "%zu pixels x %d images, model %s: load %.2f s, Woodham %.2f s, specular %.2f s, "
+      "per-pixel fit %.2f s\n",
+      data.pixel_count(), data.images, reflectance::LobeName(options.model).c_str(), load_seconds,
+      result.summary.init_seconds, result.summary.specular_seconds, result.summary.solve_seconds);
+  if (result.material_estimated) {
+    std::printf(
+        "Estimated ks = [%.3f %.3f %.3f], shininess = %.1f, ambient = [%.3f %.3f %.3f] (%s)\n",
+        result.ks[0], result.ks[1], result.ks[2], result.shininess, result.ambient_term[0],
+        result.ambient_term[1], result.ambient_term[2], result.specular_note.c_str());
+  } else if (!result.specular_note.empty()) {
+    std::printf("%s\n", result.specular_note.c_str());
+  }
+  if (result.summary.dark_pixels + result.summary.underdetermined_pixels > 0) {
+    std::printf(
+        "%zu pixels dark in every image and %zu with fewer than 3 usable lights: "
+        "flagged -1 in residual.exr\n",
+        result.summary.dark_pixels, result.summary.underdetermined_pixels);
+  }
+  if (errors) {
+    std::printf(
+        "Angular error against the ground truth: mean %.2f deg, median %.2f deg "
+        "(< 5 deg: %.0f%%, < 10 deg: %.0f%%, < 20 deg: %.0f%%)\n",
+        errors->mean_deg, errors->median_deg, 100 * errors->below_5_deg, 100 * errors->below_10_deg,
+        100 * errors->below_20_deg);
+  }
+  std::printf("Wrote %s: normals.exr, normals.png, albedo.exr, residual.exr, metrics.json%s%s\n",
+              o.output_dir.c_str(), result.material_estimated ? ", material.json" : "",
+              errors ? ", error.png" : "");
+}
+
+struct EvalOptions {
+  std::string estimate, ground_truth, mask;
+  std::string error_map;
+};
+
+void RunEval(const EvalOptions& o) {
+  const ImageF estimate = io::ReadImage(o.estimate);
+  ImageF truth;
+  Mask mask;
+  if (std::filesystem::is_directory(o.ground_truth)) {
+    io::DatasetLoadOptions load;
+    load.load_images = false;
+    io::Dataset d = io::LoadDataset(o.ground_truth, load);
+    if (d.normal_gt.pixels.empty()) throw std::runtime_error(o.ground_truth + ": no ground truth");
+    truth = d.normal_gt;
+    mask = d.mask.width > 0 ? d.mask : Mask(truth.width, truth.height, true);
+  } else if (std::filesystem::path(o.ground_truth).extension() == ".mat") {
+    truth = io::ReadNormalMat(o.ground_truth, "Normal_gt");
+  } else {
+    truth = io::ReadImage(o.ground_truth);
+  }
+  if (mask.width == 0) mask = Mask(truth.width, truth.height, true);
+  if (!o.mask.empty()) {
+    const ImageF m = io::ReadImage(o.mask);
+    mask = Mask(m.width, m.height, false);
+    for (std::size_t p = 0; p < m.pixel_count(); ++p) mask.inside[p] = m.pixels[p * m.channels] > 0;
+  }
+  if (estimate.width != truth.width || estimate.height != truth.height) {
+    throw std::runtime_error(o.estimate + ": is " + std::to_string(estimate.width) + "x" +
+                             std::to_string(estimate.height) + ", the ground truth " +
+                             std::to_string(truth.width) + "x" + std::to_string(truth.height));
+  }
+  const solve::AngularErrorMetrics m = solve::CompareNormals(estimate, truth, mask);
+  std::printf("%s\n", MetricsJson(m).dump(2).c_str());
+  if (!o.error_map.empty()) io::WriteErrorMap(o.error_map, m.error_deg, mask, ErrorScale(m));
+}
+
+}  // namespace
+
+void AddNormalsCommand(CLI::App& app) {
+  auto o = std::make_shared<NormalsCommandOptions>();
+  auto* cmd = app.add_subcommand("normals", "Recover normals and albedo from a dataset directory");
+  cmd->add_option("dataset", o->dataset, "Dataset directory (DiLiGenT layout)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("-o,--output", o->output_dir, "Output directory (replaced atomically)")
+      ->required();
+  cmd->add_option("--model", o->model, "Reflectance model (default: material.json's, else phong)")
+      ->check(CLI::IsMember({"phong", "blinn-phong", "lambert"}));
+  cmd->add_flag("--ignore-material", o->ignore_material,
+                "Ignore material.json and estimate the specular coefficients");
+  cmd->add_option("--discard-dark", o->discard_dark,
+                  "Fraction of each pixel's darkest observations Woodham drops")
+      ->check(CLI::Range(0.0, 0.9))
+      ->capture_default_str();
+  cmd->add_option("--discard-bright", o->discard_bright,
+                  "Fraction of each pixel's brightest observations Woodham drops")
+      ->check(CLI::Range(0.0, 0.9))
+      ->capture_default_str();
+  cmd->add_option("--normal-map-convention", o->convention, "normals.png green axis")
+      ->check(CLI::IsMember({"opengl", "directx"}))
+      ->capture_default_str();
+  cmd->add_option("--robust-scale", o->robust_scale,
+                  "Cauchy scale relative to each pixel's mean value (smaller = more outliers)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--irls-rounds", o->irls_rounds, "Reweighting rounds of the robust fit")
+      ->check(CLI::Range(1, 20))
+      ->capture_default_str();
+  cmd->add_option("--threads", o->threads, "Threads (0 = all cores)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->callback([o] { RunNormals(*o); });
+
+  auto e = std::make_shared<EvalOptions>();
+  auto* eval = app.add_subcommand("eval", "Angular error of a normal map against ground truth");
+  eval->add_option("estimate", e->estimate, "Estimated normals (EXR, xyz)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  eval->add_option("ground_truth", e->ground_truth,
+                   "Dataset directory, Normal_gt.mat or a normal map (EXR)")
+      ->required()
+      ->check(CLI::ExistingPath);
+  eval->add_option("--mask", e->mask, "Mask image (nonzero = evaluate)");
+  eval->add_option("--error-map", e->error_map, "Write the error picture (PNG) here");
+  eval->callback([e] { RunEval(*e); });
+}
+
+}  // namespace iphong::cli

@@ -1,0 +1,70 @@
+#include "io/visualize.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cstdio>
+
+#include "io/image_io.h"
+
+namespace iphong::io {
+
+ImageF NormalMapPicture(const ImageF& normals, const Mask& mask, bool directx) {
+  ImageF picture(normals.width, normals.height, 3);
+  for (std::size_t p = 0; p < mask.inside.size(); ++p) {
+    if (!mask.inside[p]) continue;
+    for (int c = 0; c < 3; ++c) {
+      float v = normals.pixels[3 * p + c];
+      if (directx && c == 1) v = -v;
+      picture.pixels[3 * p + c] = 0.5f * (v + 1);
+    }
+  }
+  return picture;
+}
+
+void WriteErrorMap(const std::string& path, const ImageF& error_deg, const Mask& mask,
+                   double max_deg) {
+  const int w = error_deg.width, h = error_deg.height;
+  const int bar = std::max(60, w / 8);
+  cv::Mat gray(h, w, CV_8UC1, cv::Scalar(0));
+  for (int row = 0; row < h; ++row)
+    for (int col = 0; col < w; ++col) {
+      const double e = error_deg.pixels[static_cast<std::size_t>(row) * w + col];
+      gray.at<unsigned char>(row, col) =
+          static_cast<unsigned char>(std::clamp(e / max_deg, 0.0, 1.0) * 255 + 0.5);
+    }
+  cv::Mat colored;
+  cv::applyColorMap(gray, colored, cv::COLORMAP_JET);
+  cv::Mat canvas(h, w + bar, CV_8UC3, cv::Scalar(255, 255, 255));
+  for (int row = 0; row < h; ++row)
+    for (int col = 0; col < w; ++col)
+      canvas.at<cv::Vec3b>(row, col) =
+          mask.at(col, row) ? colored.at<cv::Vec3b>(row, col) : cv::Vec3b(0, 0, 0);
+  // Scale bar: top = max_deg, bottom = 0, with labels.
+  const int top = 20, bottom = h - 20, x0 = w + 10, x1 = w + 10 + bar / 4;
+  cv::Mat ramp(std::max(bottom - top, 1), 1, CV_8UC1);
+  for (int i = 0; i < ramp.rows; ++i)
+    ramp.at<unsigned char>(i, 0) = 255 - 255 * i / std::max(ramp.rows - 1, 1);
+  cv::Mat ramp_colored;
+  cv::applyColorMap(ramp, ramp_colored, cv::COLORMAP_JET);
+  for (int i = 0; i < ramp.rows; ++i)
+    cv::line(canvas, {x0, top + i}, {x1, top + i}, ramp_colored.at<cv::Vec3b>(i, 0));
+  const double font = std::max(0.35, h / 900.0);
+  char label[32];
+  for (int tick = 0; tick <= 4; ++tick) {
+    const int y = bottom - (bottom - top) * tick / 4;
+    std::snprintf(label, sizeof label, "%g", max_deg * tick / 4);
+    cv::putText(canvas, label, {x1 + 4, y + 4}, cv::FONT_HERSHEY_SIMPLEX, font,
+                cv::Scalar(0, 0, 0));
+  }
+  cv::putText(canvas, "deg", {x0, top - 6}, cv::FONT_HERSHEY_SIMPLEX, font, cv::Scalar(0, 0, 0));
+  ImageF image(w + bar, h, 3);
+  for (int row = 0; row < h; ++row)
+    for (int col = 0; col < w + bar; ++col) {
+      const cv::Vec3b bgr = canvas.at<cv::Vec3b>(row, col);
+      for (int c = 0; c < 3; ++c) image.at(col, row)[c] = bgr[2 - c] / 255.0f;  // BGR → RGB
+    }
+  WriteImage(path, image, {8, Encoding::kLinear});
+}
+
+}  // namespace iphong::io

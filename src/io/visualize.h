@@ -1,0 +1,19 @@
+// Pictures of results that people would rather look at than numbers.
+#pragma once
+
+#include <string>
+
+#include "core/types.h"
+
+namespace iphong::io {
+
+// (n + 1)/2 per channel, 0 outside the mask. OpenGL convention (green = +y up) unless `directx`
+// (green = −y, as DirectX tangent-space maps expect).
+ImageF NormalMapPicture(const ImageF& normals, const Mask& mask, bool directx = false);
+
+// Angular error (degrees, 1 channel) as a colour map from 0 to `max_deg` with a labelled scale
+// bar on the right; black outside the mask. Written as an 8-bit PNG (atomically).
+void WriteErrorMap(const std::string& path, const ImageF& error_deg, const Mask& mask,
+                   double max_deg);
+
+}  // namespace iphong::io

@@ -1,0 +1,55 @@
+#include "solve/metrics.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace iphong::solve {
+
+AngularErrorMetrics CompareNormals(const ImageF& estimate, const ImageF& ground_truth,
+                                   const Mask& mask) {
+  if (estimate.width != ground_truth.width || estimate.height != ground_truth.height ||
+      estimate.channels < 3 || ground_truth.channels < 3 || mask.width != estimate.width ||
+      mask.height != estimate.height) {
+    throw std::invalid_argument("estimate, ground truth and mask differ in size");
+  }
+  AngularErrorMetrics m;
+  m.error_deg = ImageF(estimate.width, estimate.height, 1);
+  std::vector<double> errors;
+  for (std::size_t p = 0; p < estimate.pixel_count(); ++p) {
+    if (!mask.inside[p]) continue;
+    const float* e = estimate.pixels.data() + p * estimate.channels;
+    const float* g = ground_truth.pixels.data() + p * ground_truth.channels;
+    const Vec3d a(e[0], e[1], e[2]), b(g[0], g[1], g[2]);
+    if (!(b.norm() > 0.5)) continue;  // no ground truth here
+    const double na = a.norm();
+    // atan2 of |a×b| and a·b is accurate for tiny angles, where acos loses digits.
+    const double angle = na > 0 ? std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI : 180.0;
+    errors.push_back(angle);
+    m.error_deg.pixels[p] = static_cast<float>(angle);
+  }
+  if (errors.empty()) throw std::invalid_argument("no pixel has both an estimate and ground truth");
+  m.pixels = errors.size();
+  double sum = 0;
+  for (double e : errors) {
+    sum += e;
+    m.below_5_deg += e < 5;
+    m.below_10_deg += e < 10;
+    m.below_20_deg += e < 20;
+  }
+  const double n = static_cast<double>(errors.size());
+  m.mean_deg = sum / n;
+  m.below_5_deg /= n;
+  m.below_10_deg /= n;
+  m.below_20_deg /= n;
+  std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+  m.median_deg = errors[errors.size() / 2];
+  if (errors.size() % 2 == 0) {
+    m.median_deg = 0.5 * (m.median_deg +
+                          *std::max_element(errors.begin(), errors.begin() + errors.size() / 2));
+  }
+  return m;
+}
+
+}  // namespace iphong::solve

@@ -1,0 +1,27 @@
+// Angular error between estimated and ground-truth normal maps, the standard figures of
+// photometric-stereo benchmarks (DiLiGenT reports the mean).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/types.h"
+
+namespace iphong::solve {
+
+struct AngularErrorMetrics {
+  std::size_t pixels = 0;
+  double mean_deg = 0;
+  double median_deg = 0;
+  double below_5_deg = 0;  // fraction of pixels
+  double below_10_deg = 0;
+  double below_20_deg = 0;
+  ImageF error_deg;  // 1 channel, 0 outside the evaluated pixels
+};
+
+// Over the pixels inside `mask` where the ground truth is a non-zero vector. Both maps are
+// 3-channel xyz. Throws std::invalid_argument on size mismatch or an empty evaluation set.
+AngularErrorMetrics CompareNormals(const ImageF& estimate, const ImageF& ground_truth,
+                                   const Mask& mask);
+
+}  // namespace iphong::solve

@@ -1,0 +1,532 @@
+#include "solve/normals.h"
+
+#include <ceres/ceres.h>
+#include <ceres/tiny_solver.h>
+#include <ceres/tiny_solver_autodiff_function.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <stdexcept>
+
+#include "core/parallel.h"
+#include "reflectance/phong.h"
+#include "reflectance/shade.h"
+
+namespace iphong::solve {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using Jet2 = ceres::Jet<double, 2>;
+const Vec3d kView(0, 0, 1);
+
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+double Luminance(const Vec3d& rgb) { return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]; }
+
+// Two unit vectors completing n to an orthonormal basis.
+void Tangents(const Vec3d& n, Vec3d* t1, Vec3d* t2) {
+  const Vec3d a = std::abs(n.x()) < 0.9 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
+  *t1 = n.cross(a).normalized();
+  *t2 = n.cross(*t1);
+}
+
+enum class PixelStatus { kSolved, kDark, kUnderdetermined };
+
+struct PixelSolution {
+  PixelStatus status = PixelStatus::kSolved;
+  Vec3d normal = Vec3d(0, 0, 1);
+  Vec3d albedo = Vec3d::Zero();
+  double residual = -1;
+  int iterations = 0;
+};
+
+// Woodham on the luminance of (I − ambient)/E over the kept observations.
+PixelSolution Woodham(const PhotometricData& data, std::size_t p, const NormalOptions& o,
+                      std::vector<std::pair<double, int>>& order) {
+  const int k = data.images;
+  const float* obs = data.pixel(p);
+  order.clear();
+  double brightest = 0;
+  for (int j = 0; j < k; ++j) {
+    const Vec3d rgb(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]);
+    const double g = Luminance((rgb - o.ambient_term).cwiseQuotient(data.light_intensities[j]));
+    order.emplace_back(g, j);
+    brightest = std::max(brightest, g);
+  }
+  PixelSolution s;
+  if (!(brightest > 1e-8)) {
+    s.status = PixelStatus::kDark;
+    return s;
+  }
+  std::sort(order.begin(), order.end());
+  int first = static_cast<int>(std::floor(o.discard_dark * k));
+  int last = k - static_cast<int>(std::floor(o.discard_bright * k));
+  if (last - first < 3) {
+    first = 0;
+    last = k;
+  }
+  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+  Vec3d atb = Vec3d::Zero();
+  for (int i = first; i < last; ++i) {
+    const Vec3d& l = data.light_directions[order[i].second];
+    ata += l * l.transpose();
+    atb += l * order[i].first;
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(ata);
+  if (last - first < 3 || ldlt.rcond() < 1e-9) {
+    s.status = PixelStatus::kUnderdetermined;
+    return s;
+  }
+  const Vec3d b = ldlt.solve(atb);
+  if (!(b.norm() > 1e-12) || !b.allFinite()) {
+    s.status = PixelStatus::kDark;
+    return s;
+  }
+  s.normal = b.normalized();
+  // Per-channel albedo on the kept, lit observations.
+  Vec3d num = Vec3d::Zero(), den = Vec3d::Zero();
+  double sq = 0;
+  int used = 0;
+  for (int i = first; i < last; ++i) {
+    const int j = order[i].second;
+    const double nl = s.normal.dot(data.light_directions[j]);
+    if (nl <= 0) continue;
+    const Vec3d rgb = (Vec3d(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]) - o.ambient_term)
+                          .cwiseQuotient(data.light_intensities[j]);
+    num += rgb * nl;
+    den += Vec3d::Constant(nl * nl);
+  }
+  s.albedo = num.cwiseQuotient(den.cwiseMax(1e-12)).cwiseMax(0.0);
+  for (int i = first; i < last; ++i) {
+    const int j = order[i].second;
+    const double nl = std::max(0.0, s.normal.dot(data.light_directions[j]));
+    for (int c = 0; c < 3; ++c) {
+      const double pred = o.ambient_term[c] + data.light_intensities[j][c] * s.albedo[c] * nl;
+      sq += std::pow(obs[3 * j + c] - pred, 2);
+      ++used;
+    }
+  }
+  s.residual = std::sqrt(sq / std::max(used, 1));
+  return s;
+}
+
+// The per-pixel model with the albedo eliminated: residuals as a function of the normal only.
+struct PixelCost {
+  const PhotometricData* data = nullptr;
+  const float* obs = nullptr;
+  const double* weight = nullptr;  // K × 3, 0 for unused observations
+  Vec3d n0, t1, t2;                // tangent-plane chart: N = normalize(n0 + x0 t1 + x1 t2)
+  Vec3d ambient, ks;
+  double shininess = 1;
+  reflectance::ModelOptions model;
+  mutable std::vector<double> scratch_d;  // N·L and lobe per light, reused between calls
+  mutable std::vector<Jet2> scratch_j;
+
+  int NumResiduals() const { return 3 * data->images; }
+
+  template <typename T>
+  std::vector<T>& Scratch() const {
+    if constexpr (std::is_same_v<T, double>) {
+      return scratch_d;
+    } else {
+      return scratch_j;
+    }
+  }
+
+  template <typename T>
+  Vec3T<T> Normal(const T* x) const {
+    const Vec3T<T> n = n0.cast<T>() + x[0] * t1.cast<T>() + x[1] * t2.cast<T>();
+    return n / n.norm();
+  }
+
+  // Residuals (weighted) for normal N; the albedo that minimizes them goes to *albedo.
+  template <typename T>
+  void Evaluate(const Vec3T<T>& normal, T* residuals, Vec3T<T>* albedo) const {
+    const int k = data->images;
+    std::vector<T>& s = Scratch<T>();
+    s.resize(2 * k);
+    const Vec3T<T> view = kView.cast<T>();
+    const T n_shine = T(shininess);
+    Vec3T<T> num = Vec3T<T>::Zero(), den = Vec3T<T>::Zero();
+    for (int j = 0; j < k; ++j) {
+      const Vec3T<T> l = data->light_directions[j].cast<T>();
+      const T nl = normal.dot(l);
+      T& nl_plus = s[2 * j];
+      T& lobe = s[2 * j + 1];
+      if (nl > T(0)) {
+        nl_plus = nl;
+        lobe = reflectance::SpecularLobe<T>(normal, view, l, n_shine, model);
+      } else {
+        nl_plus = T(0);
+        lobe = T(0);
+      }
+      for (int c = 0; c < 3; ++c) {
+        const double w = weight[3 * j + c];
+        if (w == 0) continue;
+        const double e = data->light_intensities[j][c];
+        const T target = T(obs[3 * j + c] - ambient[c]) - T(e * ks[c]) * lobe;
+        num[c] += T(w * e) * nl_plus * target;
+        den[c] += T(w * e * e) * nl_plus * nl_plus;
+      }
+    }
+    Vec3T<T> kd;
+    for (int c = 0; c < 3; ++c) {
+      kd[c] = den[c] > T(1e-12) ? num[c] / den[c] : T(0);
+      if (kd[c] < T(0)) kd[c] = T(0);
+    }
+    if (albedo) *albedo = kd;
+    if (!residuals) return;
+    for (int j = 0; j < k; ++j) {
+      for (int c = 0; c < 3; ++c) {
+        const double w = weight[3 * j + c];
+        const double e = data->light_intensities[j][c];
+        const T pred = T(ambient[c]) + T(e) * (kd[c] * s[2 * j] + T(ks[c]) * s[2 * j + 1]);
+        residuals[3 * j + c] = T(std::sqrt(w)) * (T(obs[3 * j + c]) - pred);
+      }
+    }
+  }
+
+  template <typename T>
+  bool operator()(const T* x, T* residuals) const {
+    Evaluate<T>(Normal(x), residuals, nullptr);
+    return true;
+  }
+};
+
+using PixelFunction = ceres::TinySolverAutoDiffFunction<PixelCost, Eigen::Dynamic, 2>;
+
+// Per-thread solver state: allocated once per chunk of pixels, never per pixel.
+struct PixelFitter {
+  const PhotometricData& data;
+  const NormalOptions& options;
+  PixelCost cost;
+  PixelFunction function;
+  ceres::TinySolver<PixelFunction> solver;
+  std::vector<double> weights, residuals;
+
+  PixelFitter(const PhotometricData& d, const NormalOptions& o, const Vec3d& ks, double shininess)
+      : data(d), options(o), cost(MakeCost(d, o, ks, shininess)), function(cost) {
+    solver.options.max_num_iterations = o.max_iterations;
+    solver.options.parameter_tolerance = 1e-10;
+    solver.options.function_tolerance = 1e-10;
+    solver.options.gradient_tolerance = 1e-14;
+    weights.resize(3 * d.images);
+    residuals.resize(3 * d.images);
+  }
+
+  static PixelCost MakeCost(const PhotometricData& d, const NormalOptions& o, const Vec3d& ks,
+                            double shininess) {
+    PixelCost c;
+    c.data = &d;
+    c.ambient = o.ambient_term;
+    c.ks = ks;
+    c.shininess = shininess;
+    c.model.lobe = o.model;
+    return c;
+  }
+
+  // Refines `s` (from Woodham) in place. Buffers are the fitter's: nothing is allocated here.
+  void Fit(std::size_t p, PixelSolution& s) {
+    const int k = data.images;
+    const float* obs = data.pixel(p);
+    cost.obs = obs;
+    double mean = 0;
+    int usable = 0;
+    for (int j = 0; j < k; ++j) {
+      bool saturated = false;
+      for (int c = 0; c < 3; ++c) saturated |= obs[3 * j + c] >= options.saturation;
+      for (int c = 0; c < 3; ++c) usable_[3 * j + c] = saturated ? 0.0 : 1.0;
+      if (!saturated) {
+        ++usable;
+        for (int c = 0; c < 3; ++c) mean += obs[3 * j + c];
+      }
+    }
+    if (usable < 3) return;  // keep Woodham's answer
+    const double scale = options.robust_scale * std::max(mean / (3.0 * usable), 1e-6);
+    weights = usable_;
+    Vec3d normal = s.normal;
+    for (int round = 0; round < options.irls_rounds; ++round) {
+      cost.weight = weights.data();
+      cost.n0 = normal;
+      Tangents(normal, &cost.t1, &cost.t2);
+      Eigen::Vector2d x = Eigen::Vector2d::Zero();
+      const auto summary = solver.Solve(function, &x);
+      s.iterations += summary.iterations;
+      normal = cost.Normal(x.data());
+      // Cauchy weights from the unweighted residuals of the usable observations.
+      cost.weight = usable_.data();
+      cost.Evaluate<double>(normal, residuals.data(), nullptr);
+      for (int i = 0; i < 3 * k; ++i) {
+        const double r = residuals[i] / scale;
+        weights[i] = usable_[i] / (1.0 + r * r);
+      }
+    }
+    s.normal = normal;
+    // Albedo and RMS residual over the usable observations, unweighted.
+    cost.weight = usable_.data();
+    Vec3d albedo;
+    cost.Evaluate<double>(normal, residuals.data(), &albedo);
+    s.albedo = albedo;
+    double sq = 0;
+    for (int i = 0; i < 3 * k; ++i) sq += residuals[i] * residuals[i];
+    s.residual = std::sqrt(sq / (3.0 * usable));
+  }
+
+ private:
+  std::vector<double> usable_ = std::vector<double>(3 * data.images);
+};
+
+// Global fit of ks (RGB), log-shininess and the ambient term Ia⊙ka (RGB) over sampled pixels,
+// normals fixed, albedo eliminated.
+struct SpecularCost {
+  const PhotometricData* data;
+  std::size_t p;
+  Vec3d normal;
+  reflectance::ModelOptions model;
+  std::vector<double> weight;
+
+  template <typename T>
+  bool operator()(const T* ks, const T* log_n, const T* ambient, T* residuals) const {
+    const int k = data->images;
+    const float* obs = data->pixel(p);
+    const T shininess = exp(log_n[0]);
+    const Vec3T<T> n = normal.cast<T>(), view = kView.cast<T>();
+    std::vector<T> nl(k), lobe(k);
+    Vec3T<T> num = Vec3T<T>::Zero(), den = Vec3T<T>::Zero();
+    for (int j = 0; j < k; ++j) {
+      const Vec3T<T> l = data->light_directions[j].cast<T>();
+      const double d = normal.dot(data->light_directions[j]);
+      nl[j] = T(std::max(0.0, d));
+      lobe[j] = d > 0 ? reflectance::SpecularLobe<T>(n, view, l, shininess, model) : T(0);
+      for (int c = 0; c < 3; ++c) {
+        const double w = weight[3 * j + c];
+        const double e = data->light_intensities[j][c];
+        num[c] += T(w * e) * nl[j] * (T(obs[3 * j + c]) - ambient[c] - T(e) * ks[c] * lobe[j]);
+        den[c] += T(w * e * e) * nl[j] * nl[j];
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      T kd = den[c] > T(1e-12) ? num[c] / den[c] : T(0);
+      if (kd < T(0)) kd = T(0);
+      for (int j = 0; j < k; ++j) {
+        const double e = data->light_intensities[j][c];
+        residuals[3 * j + c] =
+            T(std::sqrt(weight[3 * j + c])) *
+            (T(obs[3 * j + c]) - ambient[c] - T(e) * (kd * nl[j] + ks[c] * lobe[j]));
+      }
+    }
+    return true;
+  }
+};
+
+struct SpecularFit {
+  Vec3d ks = Vec3d::Zero();
+  double shininess = 1;
+  Vec3d ambient = Vec3d::Zero();
+  double cost = 0, cost_without_specular = 0;
+};
+
+SpecularFit FitSpecular(const PhotometricData& data, const std::vector<std::size_t>& sample,
+                        const std::vector<PixelSolution>& solutions, const NormalOptions& o,
+                        const SpecularFit& start) {
+  double ks[3] = {start.ks[0], start.ks[1], start.ks[2]};
+  double log_n = std::log(start.shininess);
+  double ambient[3] = {start.ambient[0], start.ambient[1], start.ambient[2]};
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  std::vector<SpecularCost*> costs;
+  for (std::size_t p : sample) {
+    if (solutions[p].status != PixelStatus::kSolved) continue;
+    auto* cost = new SpecularCost{&data, p, solutions[p].normal, {}, {}};
+    cost->model.lobe = o.model;
+    cost->weight.assign(3 * data.images, 1.0);
+    const float* obs = data.pixel(p);
+    double mean = 0;
+    for (int i = 0; i < 3 * data.images; ++i) {
+      if (obs[i] >= o.saturation)
+        cost->weight[i / 3 * 3] = cost->weight[i / 3 * 3 + 1] = cost->weight[i / 3 * 3 + 2] = 0;
+      mean += obs[i];
+    }
+    mean /= 3 * data.images;
+    costs.push_back(cost);
+    auto* function = new ceres::AutoDiffCostFunction<SpecularCost, ceres::DYNAMIC, 3, 1, 3>(
+        cost, 3 * data.images, ceres::DO_NOT_TAKE_OWNERSHIP);
+    problem.AddResidualBlock(function, new ceres::CauchyLoss(o.robust_scale * std::max(mean, 1e-6)),
+                             ks, &log_n, ambient);
+  }
+  SpecularFit fit;
+  if (costs.empty()) return fit;
+  for (int c = 0; c < 3; ++c) {
+    problem.SetParameterLowerBound(ks, c, 0.0);
+    problem.SetParameterLowerBound(ambient, c, 0.0);
+  }
+  problem.SetParameterLowerBound(&log_n, 0, std::log(1.0));
+  problem.SetParameterUpperBound(&log_n, 0, std::log(1000.0));
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_QR;
+  solver_options.max_num_iterations = 50;
+  solver_options.num_threads = ResolveThreads(o.threads);
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, &problem, &summary);
+  fit.ks = Vec3d(ks[0], ks[1], ks[2]);
+  fit.shininess = std::exp(log_n);
+  fit.ambient = Vec3d(ambient[0], ambient[1], ambient[2]);
+  fit.cost = summary.final_cost;
+  // The same robust cost with no specular term (the parameter blocks are this memory), for the
+  // identifiability test.
+  std::fill(ks, ks + 3, 0.0);
+  problem.Evaluate(ceres::Problem::EvaluateOptions(), &fit.cost_without_specular, nullptr, nullptr,
+                   nullptr);
+  for (SpecularCost* cost : costs) delete cost;
+  return fit;
+}
+
+}  // namespace
+
+std::string NormalOptions::Validate() const {
+  if (!(discard_dark >= 0 && discard_bright >= 0 && discard_dark + discard_bright < 1)) {
+    return "discard fractions must be >= 0 and sum to less than 1";
+  }
+  if (!(saturation > 0)) return "saturation level must be > 0";
+  if (!(robust_scale > 0)) return "robust scale must be > 0";
+  if (irls_rounds < 1 || max_iterations < 1) return "irls rounds and iterations must be >= 1";
+  if (!ambient_term.allFinite() || (ambient_term.array() < 0).any()) {
+    return "ambient term must be finite and >= 0";
+  }
+  if (!ks.allFinite() || (ks.array() < 0).any() || !std::isfinite(shininess) || shininess < 0) {
+    return "ks and shininess must be finite and >= 0";
+  }
+  if (specular_rounds < 0 || specular_sample < 1) return "specular rounds/sample out of range";
+  return "";
+}
+
+NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& options) {
+  if (auto m = data.Validate(); !m.empty()) throw std::invalid_argument(m);
+  if (auto m = options.Validate(); !m.empty()) throw std::invalid_argument(m);
+  if (data.images < 3) {
+    throw std::invalid_argument("per-pixel photometric stereo needs at least 3 images, got " +
+                                std::to_string(data.images));
+  }
+  const std::size_t pixels = data.pixel_count();
+  std::vector<PixelSolution> solutions(pixels);
+  NormalResult result;
+  result.model = options.model;
+  result.summary.pixels = pixels;
+
+  auto start = Clock::now();
+  ParallelFor(0, pixels, 1024, options.threads, [&](std::size_t b, std::size_t e) {
+    std::vector<std::pair<double, int>> order;
+    order.reserve(data.images);
+    for (std::size_t p = b; p < e; ++p) solutions[p] = Woodham(data, p, options, order);
+  });
+  result.summary.init_seconds = Seconds(start);
+
+  Vec3d ks = options.ks;
+  double shininess = options.shininess;
+  result.material_estimated = false;
+  const bool nonlinear = options.model != reflectance::Lobe::kLambert;
+  NormalOptions effective = options;  // with the estimated ambient term, once there is one
+  auto fit_all = [&](const Vec3d& fit_ks, double fit_n, std::vector<PixelSolution>& target,
+                     bool report) {
+    std::atomic<std::size_t> done{0};
+    std::atomic<long long> iterations{0};
+    ParallelFor(0, pixels, 256, options.threads, [&](std::size_t b, std::size_t e) {
+      PixelFitter fitter(data, effective, fit_ks, fit_n);
+      long long local = 0;
+      for (std::size_t p = b; p < e; ++p) {
+        if (target[p].status != PixelStatus::kSolved) continue;
+        fitter.Fit(p, target[p]);
+        local += target[p].iterations;
+      }
+      iterations += local;
+      const std::size_t now = done += e - b;
+      if (report && options.progress) options.progress(static_cast<double>(now) / pixels);
+    });
+    return iterations.load();
+  };
+
+  if (nonlinear && !options.material_known) {
+    // Alternate: per-pixel fits on a sample, then a global fit of ks and shininess.
+    start = Clock::now();
+    std::vector<std::size_t> sample;
+    std::mt19937 rng(12345);
+    for (std::size_t p = 0; p < pixels; ++p)
+      if (solutions[p].status == PixelStatus::kSolved) sample.push_back(p);
+    std::shuffle(sample.begin(), sample.end(), rng);
+    sample.resize(std::min<std::size_t>(sample.size(), options.specular_sample));
+    SpecularFit fit;
+    // A coarse look at a few shininess values avoids the flat region of a bad start.
+    fit.ks = Vec3d::Constant(0.1);
+    fit.shininess = 20;
+    for (int round = 0; round < options.specular_rounds; ++round) {
+      fit = FitSpecular(data, sample, solutions, options, fit);
+      std::vector<PixelSolution> refined = solutions;
+      NormalOptions with_ambient = options;
+      with_ambient.ambient_term = fit.ambient;
+      PixelFitter fitter(data, with_ambient, fit.ks, fit.shininess);
+      for (std::size_t p : sample) fitter.Fit(p, refined[p]);
+      for (std::size_t p : sample) solutions[p].normal = refined[p].normal;
+    }
+    const double gain =
+        fit.cost_without_specular > 0 ? 1 - fit.cost / fit.cost_without_specular : 0;
+    if (!(fit.ks.maxCoeff() > 1e-3) || gain < 0.02) {
+      result.specular_identifiable = false;
+      result.specular_note =
+          "no highlights seen: ks and shininess are not identifiable; fitted "
+          "without a specular term";
+      ks = Vec3d::Zero();
+      shininess = 1;
+    } else {
+      ks = fit.ks;
+      shininess = fit.shininess;
+      effective.ambient_term = fit.ambient;
+      result.material_estimated = true;
+      result.specular_note =
+          "estimated from " + std::to_string(sample.size()) + " pixels; robust cost reduced by " +
+          std::to_string(static_cast<int>(std::round(100 * gain))) + "% against no specular term";
+    }
+    result.summary.specular_seconds = Seconds(start);
+  }
+  result.ks = ks;
+  result.shininess = shininess;
+  result.ambient_term = effective.ambient_term;
+
+  if (nonlinear) {
+    start = Clock::now();
+    result.summary.iterations = fit_all(ks, shininess, solutions, true);
+    result.summary.solve_seconds = Seconds(start);
+  }
+
+  result.normals = ImageF(data.width, data.height, 3);
+  result.albedo = ImageF(data.width, data.height, 3);
+  result.residual = ImageF(data.width, data.height, 1);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    const std::size_t p = static_cast<std::size_t>(data.pixels[i]);
+    const PixelSolution& s = solutions[i];
+    if (s.status == PixelStatus::kDark) ++result.summary.dark_pixels;
+    if (s.status == PixelStatus::kUnderdetermined) ++result.summary.underdetermined_pixels;
+    const bool ok = s.status == PixelStatus::kSolved && s.normal.allFinite();
+    const Vec3d n = ok ? s.normal : Vec3d(0, 0, 1);  // never NaN: flagged in the residual map
+    for (int c = 0; c < 3; ++c) {
+      result.normals.pixels[3 * p + c] = static_cast<float>(n[c]);
+      result.albedo.pixels[3 * p + c] = ok ? static_cast<float>(s.albedo[c]) : 0.0f;
+    }
+    result.residual.pixels[p] = ok ? static_cast<float>(s.residual) : -1.0f;
+  }
+  result.summary.success = true;
+  result.summary.message =
+      "solved " +
+      std::to_string(pixels - result.summary.dark_pixels - result.summary.underdetermined_pixels) +
+      " of " + std::to_string(pixels) + " pixels";
+  return result;
+}
+
+}  // namespace iphong::solve

@@ -1,0 +1,84 @@
+// Normal recovery: per-pixel unit normals and RGB albedo from K ≥ 3 images under known lights,
+// by inverting the shared Phong model (reflectance/phong.h) with Ceres.
+//
+// 1. Woodham's Lambertian least squares per pixel on the luminance of I_j / E_j, using the
+//    observations left after dropping the darkest and brightest fractions (shadows, highlights).
+//    This is also the `lambert` result.
+// 2. A per-pixel nonlinear fit of the Phong (or Blinn-Phong) model with ceres::TinySolver and
+//    autodiff. The unknowns are 2: the normal on a tangent-plane chart around the current estimate
+//    (re-centred every round, so the chart never degenerates). The RGB albedo is linear in the
+//    residuals and eliminated in closed form inside the functor (variable projection). Cauchy
+//    weights (iteratively reweighted) absorb cast shadows and interreflections; attached shadows
+//    are in the model (N·L ≤ 0 gives the ambient value); saturated observations are dropped.
+// 3. Without known coefficients, ks (RGB), the shininess and the ambient term Ia⊙ka (RGB) are
+//    estimated jointly with the normals: rounds of a
+//    global Ceres fit over a sample of pixels (normals fixed, albedo eliminated) alternate with
+//    the per-pixel fits. When no highlight is seen they are reported as not identifiable.
+// Frame: SPEC.md's camera frame, orthographic view V = (0, 0, 1).
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include "reflectance/material.h"
+#include "solve/photometric_data.h"
+
+namespace iphong::solve {
+
+struct NormalOptions {
+  reflectance::Lobe model = reflectance::Lobe::kPhong;  // kLambert: Woodham only
+  // Woodham: fractions of each pixel's observations dropped, darkest and brightest first.
+  double discard_dark = 0.3;
+  double discard_bright = 0.1;
+  // Observations with a channel at or above this value are treated as saturated and unused.
+  double saturation = 0.995;
+  // Cauchy scale relative to the pixel's mean observation.
+  double robust_scale = 0.15;
+  int irls_rounds = 3;
+  int max_iterations = 10;  // per pixel and round
+
+  // Known coefficients (material.json). Otherwise ks and shininess are estimated.
+  bool material_known = false;
+  Vec3d ambient_term = Vec3d::Zero();  // Ia ⊙ ka, subtracted from every image
+  Vec3d ks = Vec3d::Zero();
+  double shininess = 1;
+  int specular_rounds = 2;
+  int specular_sample = 3000;  // pixels in the global fit
+
+  int threads = 0;
+  // Called with the fraction done (0..1) from worker threads; must be thread-safe.
+  std::function<void(double)> progress;
+
+  std::string Validate() const;
+};
+
+struct NormalSummary {
+  bool success = false;
+  std::string message;
+  double init_seconds = 0;      // Woodham
+  double specular_seconds = 0;  // global fits of ks and shininess
+  double solve_seconds = 0;     // per-pixel nonlinear fits
+  long long iterations = 0;     // per-pixel solver iterations, summed
+  std::size_t pixels = 0;
+  std::size_t dark_pixels = 0;             // dark in every image: no normal (flagged)
+  std::size_t underdetermined_pixels = 0;  // fewer than 3 usable lights (flagged)
+};
+
+struct NormalResult {
+  ImageF normals;   // 3 channels, unit xyz in the camera frame; 0 outside the mask
+  ImageF albedo;    // 3 channels, kd
+  ImageF residual;  // 1 channel: RMS model residual per pixel; −1 where no normal was found
+  reflectance::Lobe model = reflectance::Lobe::kPhong;
+  Vec3d ks = Vec3d::Zero();
+  double shininess = 1;
+  Vec3d ambient_term = Vec3d::Zero();  // Ia ⊙ ka, known or estimated
+  bool material_estimated = false;
+  bool specular_identifiable = true;
+  std::string specular_note;
+  NormalSummary summary;
+};
+
+// Throws std::invalid_argument for invalid data or options (one-line message).
+NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& options);
+
+}  // namespace iphong::solve

@@ -1,0 +1,61 @@
+#include "solve/photometric_data.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace iphong::solve {
+
+std::string PhotometricData::Validate() const {
+  if (images < 1) return "photometric stereo needs at least one image";
+  if (light_directions.size() != static_cast<std::size_t>(images) ||
+      light_intensities.size() != static_cast<std::size_t>(images)) {
+    return std::to_string(images) + " images but " + std::to_string(light_directions.size()) +
+           " light directions and " + std::to_string(light_intensities.size()) + " intensities";
+  }
+  for (int j = 0; j < images; ++j) {
+    if (!light_directions[j].allFinite() || std::abs(light_directions[j].norm() - 1) > 1e-6) {
+      return "light direction " + std::to_string(j + 1) + " is not a finite unit vector";
+    }
+    if (!light_intensities[j].allFinite() || !(light_intensities[j].array() > 0).all()) {
+      return "light intensity " + std::to_string(j + 1) + " must be finite and > 0";
+    }
+  }
+  if (values.size() != pixels.size() * images * 3) return "observation array has the wrong size";
+  return "";
+}
+
+PhotometricData GatherObservations(const std::vector<const float*>& images, int width, int height,
+                                   const Mask& mask, const std::vector<Vec3d>& light_directions,
+                                   const std::vector<Vec3d>& light_intensities) {
+  if (mask.width != width || mask.height != height) {
+    throw std::invalid_argument("the mask is " + std::to_string(mask.width) + "x" +
+                                std::to_string(mask.height) + ", the images " +
+                                std::to_string(width) + "x" + std::to_string(height));
+  }
+  PhotometricData data;
+  data.width = width;
+  data.height = height;
+  data.images = static_cast<int>(images.size());
+  data.light_directions = light_directions;
+  data.light_intensities = light_intensities;
+  for (int p = 0; p < width * height; ++p)
+    if (mask.inside[p]) data.pixels.push_back(p);
+  const std::size_t k = images.size();
+  data.values.resize(data.pixels.size() * k * 3);
+  for (std::size_t i = 0; i < data.pixels.size(); ++i) {
+    for (std::size_t j = 0; j < k; ++j) {
+      const float* src = images[j] + 3 * static_cast<std::size_t>(data.pixels[i]);
+      float* dst = data.values.data() + (i * k + j) * 3;
+      for (int c = 0; c < 3; ++c) {
+        if (!std::isfinite(src[c])) {
+          throw std::invalid_argument("image " + std::to_string(j + 1) + " has a non-finite value");
+        }
+        dst[c] = src[c];
+      }
+    }
+  }
+  if (auto m = data.Validate(); !m.empty()) throw std::invalid_argument(m);
+  return data;
+}
+
+}  // namespace iphong::solve

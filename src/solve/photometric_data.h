@@ -1,0 +1,36 @@
+// Observations for photometric stereo: the masked pixels of K images under K known lights,
+// stored pixel-major (all of one pixel's K×3 values together) because every solver works one
+// pixel at a time. Memory: K × pixels × 3 floats for the masked pixels only.
+//
+// Image j is modelled (SPEC.md) as  I_j = Ia⊙ka + E_j ⊙ (kd·(N·L_j) + ks·lobe_j),  E_j the RGB
+// intensity of light j, L_j its unit direction (surface → light, camera frame), V = (0, 0, 1).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/types.h"
+
+namespace iphong::solve {
+
+struct PhotometricData {
+  int width = 0;
+  int height = 0;
+  int images = 0;                        // K
+  std::vector<int> pixels;               // row-major index of each masked pixel
+  std::vector<float> values;             // pixels × K × 3, linear
+  std::vector<Vec3d> light_directions;   // K, unit
+  std::vector<Vec3d> light_intensities;  // K, RGB, > 0
+
+  std::size_t pixel_count() const { return pixels.size(); }
+  const float* pixel(std::size_t p) const { return values.data() + p * images * 3; }
+  std::string Validate() const;
+};
+
+// Gathers the masked pixels of K images (each width×height×3, row-major from the top).
+// Throws std::invalid_argument when sizes, counts or lights are inconsistent or not finite.
+PhotometricData GatherObservations(const std::vector<const float*>& images, int width, int height,
+                                   const Mask& mask, const std::vector<Vec3d>& light_directions,
+                                   const std::vector<Vec3d>& light_intensities);
+
+}  // namespace iphong::solve

@@ -1,0 +1,262 @@
+// Normal recovery on renders with exact ground truth: round trips, noise, identifiability, bad
+// input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "geometry/primitives.h"
+#include "render/renderer.h"
+#include "solve/metrics.h"
+#include "solve/normals.h"
+
+namespace iphong::solve {
+namespace {
+
+using reflectance::Light;
+
+struct Synthetic {
+  render::Scene scene;
+  render::RenderOutput out;
+  PhotometricData data;
+};
+
+// A sphere under `lights` hemisphere lights, rendered per light (no ambient unless given).
+Synthetic MakeSphereData(const reflectance::Material& material, int lights, double noise_sigma,
+                         const Vec3d& ambient = Vec3d::Zero(), int size = 96) {
+  Synthetic s;
+  s.scene.camera = geometry::Camera::Orthographic(size, size, 2.0);
+  s.scene.lighting.ambient = ambient;
+  const double golden = M_PI * (3 - std::sqrt(5.0));
+  for (int i = 0; i < lights; ++i) {
+    const double z = 1 - 0.5 * (i + 0.5) / lights, r = std::sqrt(1 - z * z);
+    s.scene.lighting.lights.push_back(Light::Directional(
+        Vec3d(r * std::cos(golden * i), r * std::sin(golden * i), z), Vec3d(1.0, 0.9, 0.8)));
+  }
+  render::SceneObject sphere;
+  sphere.mesh = geometry::MakeSphere(0.9, 6);
+  sphere.material = material;
+  s.scene.objects.push_back(sphere);
+  render::RenderOptions options;
+  options.noise.gaussian_sigma = noise_sigma;
+  options.noise.seed = 3;
+  s.out = render::Render(s.scene, options, true);
+  std::vector<const float*> images;
+  std::vector<Vec3d> dirs, intensities;
+  for (std::size_t j = 0; j < s.out.per_light.size(); ++j) {
+    images.push_back(s.out.per_light[j].pixels.data());
+    dirs.push_back(s.scene.lighting.lights[j].direction_cam);
+    intensities.push_back(s.scene.lighting.lights[j].diffuse_intensity);
+  }
+  s.data = GatherObservations(images, size, size, s.out.mask, dirs, intensities);
+  return s;
+}
+
+reflectance::Material Plastic() {
+  reflectance::Material m;
+  m.ka = Vec3d::Constant(0.02);
+  m.kd = Vec3d(0.7, 0.5, 0.3);
+  m.ks = Vec3d::Constant(0.4);
+  m.shininess = 20;
+  return m;
+}
+
+NormalOptions Known(const reflectance::Material& m, const Vec3d& ambient) {
+  NormalOptions o;
+  o.material_known = true;
+  o.ambient_term = ambient.cwiseProduct(m.ka);
+  o.ks = m.ks;
+  o.shininess = m.shininess;
+  return o;
+}
+
+TEST(Normals, RoundTripWithKnownCoefficientsIsExact) {
+  const auto m = Plastic();
+  const Synthetic s = MakeSphereData(m, 24, 0.0, Vec3d::Ones());
+  const NormalResult r = EstimateNormals(s.data, Known(m, Vec3d::Ones()));
+  const AngularErrorMetrics e = CompareNormals(r.normals, s.out.normal_cam, s.out.mask);
+  RecordProperty("mean_error_deg", std::to_string(e.mean_deg));
+  EXPECT_LE(e.mean_deg, 0.01);
+  EXPECT_LE(e.median_deg, 0.01);
+  for (std::size_t p = 0; p < s.out.mask.inside.size(); p += 13) {
+    if (!s.out.mask.inside[p]) continue;
+    for (int c = 0; c < 3; ++c) ASSERT_NEAR(r.albedo.pixels[3 * p + c], m.kd[c], 2e-3);
+  }
+  EXPECT_EQ(r.summary.dark_pixels, 0u);
+}
+
+TEST(Normals, BlinnPhongRoundTripToo) {
+  auto m = Plastic();
+  m.shininess = 60;
+  Synthetic s;
+  {
+    // Render with the Blinn-Phong lobe.
+    s = MakeSphereData(m, 20, 0.0);
+    render::RenderOptions options;
+    options.model.lobe = reflectance::Lobe::kBlinnPhong;
+    s.out = render::Render(s.scene, options, true);
+    std::vector<const float*> images;
+    for (const ImageF& image : s.out.per_light) images.push_back(image.pixels.data());
+    s.data = GatherObservations(images, 96, 96, s.out.mask, s.data.light_directions,
+                                s.data.light_intensities);
+  }
+  NormalOptions o = Known(m, Vec3d::Zero());
+  o.model = reflectance::Lobe::kBlinnPhong;
+  const AngularErrorMetrics e =
+      CompareNormals(EstimateNormals(s.data, o).normals, s.out.normal_cam, s.out.mask);
+  EXPECT_LE(e.mean_deg, 0.01);
+}
+
+TEST(Normals, EstimatesUnknownSpecularCoefficientsAndAmbient) {
+  const auto m = Plastic();
+  const Synthetic s = MakeSphereData(m, 24, 0.0, Vec3d::Ones());
+  NormalOptions o;  // nothing known
+  const NormalResult r = EstimateNormals(s.data, o);
+  EXPECT_TRUE(r.material_estimated);
+  EXPECT_NEAR(r.shininess, 20, 2.0);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(r.ks[c], 0.4, 0.04);
+    EXPECT_NEAR(r.ambient_term[c], 0.02, 0.005);
+  }
+  const AngularErrorMetrics e = CompareNormals(r.normals, s.out.normal_cam, s.out.mask);
+  EXPECT_LT(e.mean_deg, 0.5);
+  // Lambertian fitting of the same images is clearly worse: highlights bias it.
+  NormalOptions lambert;
+  lambert.model = reflectance::Lobe::kLambert;
+  const AngularErrorMetrics w =
+      CompareNormals(EstimateNormals(s.data, lambert).normals, s.out.normal_cam, s.out.mask);
+  EXPECT_GT(w.mean_deg, 3 * e.mean_deg);
+}
+
+TEST(Normals, ErrorGrowsSmoothlyWithNoise) {
+  const auto m = Plastic();
+  double previous = -1;
+  std::string table;
+  for (double sigma : {0.0, 0.0025, 0.005, 0.01, 0.02}) {
+    const Synthetic s = MakeSphereData(m, 24, sigma);
+    const AngularErrorMetrics e = CompareNormals(
+        EstimateNormals(s.data, Known(m, Vec3d::Zero())).normals, s.out.normal_cam, s.out.mask);
+    table += " sigma " + std::to_string(sigma) + ": " + std::to_string(e.mean_deg) + " deg;";
+    EXPECT_GT(e.mean_deg, previous);
+    // Roughly linear in sigma: the error per unit of noise stays bounded (about 30 deg per unit).
+    if (sigma > 0) {
+      EXPECT_LT(e.mean_deg / sigma, 60.0) << "sigma " << sigma;
+    }
+    previous = e.mean_deg;
+  }
+  RecordProperty("noise_table", table);
+  std::printf("noise sweep:%s\n", table.c_str());
+}
+
+TEST(Normals, MatteObjectsReportSpecularNotIdentifiable) {
+  reflectance::Material matte;
+  matte.kd = Vec3d(0.6, 0.6, 0.6);
+  const Synthetic s = MakeSphereData(matte, 16, 0.0);
+  const NormalResult r = EstimateNormals(s.data, NormalOptions{});
+  EXPECT_FALSE(r.material_estimated);
+  EXPECT_FALSE(r.specular_identifiable);
+  EXPECT_NE(r.specular_note.find("not identifiable"), std::string::npos);
+  EXPECT_LT(CompareNormals(r.normals, s.out.normal_cam, s.out.mask).mean_deg, 0.05);
+}
+
+TEST(Normals, WoodhamIsExactWhereEveryLightIsSeen) {
+  // A gentle bump lit from near the view axis: no attached shadows, pure Lambert.
+  render::Scene scene;
+  scene.camera = geometry::Camera::Orthographic(64, 64, 2.0);
+  for (const Vec3d& d :
+       {Vec3d(0.2, 0.1, 1), Vec3d(-0.2, 0.15, 1), Vec3d(0.05, -0.25, 1), Vec3d(-0.1, -0.1, 1)}) {
+    scene.lighting.lights.push_back(Light::Directional(d, Vec3d::Ones()));
+  }
+  render::SceneObject bump;
+  bump.mesh = geometry::MakeHeightField(geometry::BumpRipples{0.2, 0.4, 0, 1}, 2.2, 2.2, 200, 200);
+  bump.material.kd = Vec3d(0.5, 0.6, 0.7);
+  scene.objects.push_back(bump);
+  const render::RenderOutput out = render::Render(scene, render::RenderOptions{}, true);
+  std::vector<const float*> images;
+  std::vector<Vec3d> dirs, intensities;
+  for (std::size_t j = 0; j < 4; ++j) {
+    images.push_back(out.per_light[j].pixels.data());
+    dirs.push_back(scene.lighting.lights[j].direction_cam);
+    intensities.push_back(Vec3d::Ones());
+  }
+  NormalOptions o;
+  o.model = reflectance::Lobe::kLambert;
+  o.discard_dark = o.discard_bright = 0;
+  const NormalResult r =
+      EstimateNormals(GatherObservations(images, 64, 64, out.mask, dirs, intensities), o);
+  EXPECT_LT(CompareNormals(r.normals, out.normal_cam, out.mask).mean_deg, 1e-3);
+}
+
+TEST(Normals, PixelsDarkInEveryImageAreFlaggedNotNan) {
+  const auto m = Plastic();
+  Synthetic s = MakeSphereData(m, 8, 0.0, Vec3d::Zero(), 48);
+  for (int j = 0; j < s.data.images; ++j)
+    for (int c = 0; c < 3; ++c) s.data.values[(0 * s.data.images + j) * 3 + c] = 0;  // pixel 0
+  const NormalResult r = EstimateNormals(s.data, Known(m, Vec3d::Zero()));
+  EXPECT_EQ(r.summary.dark_pixels, 1u);
+  const std::size_t p = s.data.pixels[0];
+  EXPECT_EQ(r.residual.pixels[p], -1.0f);
+  EXPECT_EQ(r.normals.pixels[3 * p + 2], 1.0f);
+  for (float v : r.normals.pixels) ASSERT_TRUE(std::isfinite(v));
+  for (float v : r.albedo.pixels) ASSERT_TRUE(std::isfinite(v));
+}
+
+TEST(Normals, BadInputGivesOneLineMessages) {
+  const auto m = Plastic();
+  Synthetic s = MakeSphereData(m, 4, 0.0, Vec3d::Zero(), 24);
+  auto message = [&](const PhotometricData& d, const NormalOptions& o) {
+    try {
+      EstimateNormals(d, o);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  PhotometricData two = s.data;
+  two.images = 2;
+  two.light_directions.resize(2);
+  two.light_intensities.resize(2);
+  two.values.resize(two.pixels.size() * 2 * 3);
+  EXPECT_EQ(message(two, NormalOptions{}),
+            "per-pixel photometric stereo needs at least 3 images, got 2");
+  PhotometricData lights = s.data;
+  lights.light_directions.pop_back();
+  EXPECT_EQ(message(lights, NormalOptions{}), "4 images but 3 light directions and 4 intensities");
+  PhotometricData zero = s.data;
+  zero.light_intensities[2] = Vec3d(1, 0, 1);
+  EXPECT_EQ(message(zero, NormalOptions{}), "light intensity 3 must be finite and > 0");
+  NormalOptions bad;
+  bad.discard_dark = 0.7;
+  bad.discard_bright = 0.4;
+  EXPECT_EQ(message(s.data, bad), "discard fractions must be >= 0 and sum to less than 1");
+  // Images: NaN and size mismatches are caught when gathering.
+  ImageF image(24, 24, 3, 0.5f);
+  image.pixels[5] = std::nanf("");
+  std::vector<const float*> images(3, image.pixels.data());
+  std::vector<Vec3d> dirs(3, Vec3d(0, 0, 1)), intensities(3, Vec3d::Ones());
+  EXPECT_THROW(GatherObservations(images, 24, 24, Mask(24, 24, true), dirs, intensities),
+               std::invalid_argument);
+  EXPECT_THROW(GatherObservations(images, 24, 24, Mask(20, 24, true), dirs, intensities),
+               std::invalid_argument);
+}
+
+TEST(Metrics, KnownAnglesAndFractions) {
+  ImageF gt(4, 1, 3), est(4, 1, 3);
+  const double angles[4] = {1, 7, 15, 30};
+  for (int i = 0; i < 4; ++i) {
+    const double a = angles[i] * M_PI / 180;
+    gt.pixels[3 * i + 2] = 1;
+    est.pixels[3 * i] = static_cast<float>(std::sin(a));
+    est.pixels[3 * i + 2] = static_cast<float>(std::cos(a));
+  }
+  const AngularErrorMetrics m = CompareNormals(est, gt, Mask(4, 1, true));
+  EXPECT_EQ(m.pixels, 4u);
+  EXPECT_NEAR(m.mean_deg, (1 + 7 + 15 + 30) / 4.0, 1e-5);
+  EXPECT_NEAR(m.median_deg, 11.0, 1e-5);
+  EXPECT_DOUBLE_EQ(m.below_5_deg, 0.25);
+  EXPECT_DOUBLE_EQ(m.below_10_deg, 0.5);
+  EXPECT_DOUBLE_EQ(m.below_20_deg, 0.75);
+  EXPECT_NEAR(m.error_deg.pixels[3], 30, 1e-5);
+}
+
+}  // namespace
+}  // namespace iphong::solve
