@@ -6,4 +6,5 @@ PYBIND11_MODULE(_core, m) {
   m.attr("__version__") = iphong::kVersion;
   iphong::python::BindReflectance(m);
   iphong::python::BindRender(m);
+  iphong::python::BindSolve(m);
 }

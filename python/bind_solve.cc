@@ -1,0 +1,173 @@
+// Python view of src/solve: arrays in, arrays out.
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <cstring>
+
+#include "bindings.h"
+#include "solve/metrics.h"
+#include "solve/normals.h"
+
+namespace py = pybind11;
+
+namespace iphong::python {
+namespace {
+
+using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+std::vector<Vec3d> Rows(const py::object& value, std::size_t expected, const char* what) {
+  DoubleArray a = DoubleArray::ensure(value);
+  if (!a || a.ndim() != 2 || a.shape(1) != 3 || static_cast<std::size_t>(a.shape(0)) != expected) {
+    throw std::invalid_argument(std::string(what) + " must have shape (" +
+                                std::to_string(expected) + ", 3)");
+  }
+  std::vector<Vec3d> rows(expected);
+  for (std::size_t i = 0; i < expected; ++i) rows[i] = Vec3d(a.at(i, 0), a.at(i, 1), a.at(i, 2));
+  return rows;
+}
+
+Mask ToMask(const py::object& value, int width, int height) {
+  if (value.is_none()) return Mask(width, height, true);
+  auto a = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(value);
+  if (!a || a.ndim() != 2 || a.shape(0) != height || a.shape(1) != width) {
+    throw std::invalid_argument("mask must have shape (H, W) = (" + std::to_string(height) + ", " +
+                                std::to_string(width) + ")");
+  }
+  Mask mask(width, height, false);
+  for (std::size_t p = 0; p < mask.inside.size(); ++p) mask.inside[p] = a.data()[p];
+  return mask;
+}
+
+ImageF ToImage(const py::object& value, const char* what) {
+  FloatArray a = FloatArray::ensure(value);
+  if (!a || a.ndim() != 3 || a.shape(2) != 3) {
+    throw std::invalid_argument(std::string(what) + " must have shape (H, W, 3)");
+  }
+  ImageF image(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)), 3);
+  std::memcpy(image.pixels.data(), a.data(), image.pixels.size() * sizeof(float));
+  return image;
+}
+
+py::array_t<float> ToArray(const ImageF& image) {
+  std::vector<py::ssize_t> shape = {image.height, image.width};
+  if (image.channels > 1) shape.push_back(image.channels);
+  py::array_t<float> array(shape);
+  std::memcpy(array.mutable_data(), image.pixels.data(), image.pixels.size() * sizeof(float));
+  return array;
+}
+
+}  // namespace
+
+void BindSolve(py::module_& m) {
+  m.def(
+      "estimate_normals",
+      [](const py::object& images_in, const py::object& light_directions,
+         const py::object& light_intensities, const py::object& mask_in, const std::string& model,
+         const py::object& material, double discard_dark, double discard_bright, int threads) {
+        FloatArray images = FloatArray::ensure(images_in);
+        if (!images || images.ndim() != 4 || images.shape(3) != 3) {
+          throw std::invalid_argument("images must have shape (K, H, W, 3)");
+        }
+        const std::size_t k = images.shape(0);
+        const int h = static_cast<int>(images.shape(1)), w = static_cast<int>(images.shape(2));
+        std::vector<Vec3d> dirs = Rows(light_directions, k, "light_directions");
+        for (Vec3d& d : dirs) {
+          if (!(d.norm() > 0) || !d.allFinite())
+            throw std::invalid_argument("zero or non-finite light direction");
+          d.normalize();
+        }
+        const std::vector<Vec3d> intensities =
+            light_intensities.is_none() ? std::vector<Vec3d>(k, Vec3d::Ones())
+                                        : Rows(light_intensities, k, "light_intensities");
+        const Mask mask = ToMask(mask_in, w, h);
+        std::vector<const float*> pointers;
+        for (std::size_t j = 0; j < k; ++j) pointers.push_back(images.data() + j * h * w * 3);
+        const solve::PhotometricData data =
+            solve::GatherObservations(pointers, w, h, mask, dirs, intensities);
+        solve::NormalOptions options;
+        options.model = reflectance::ParseLobe(model);
+        options.discard_dark = discard_dark;
+        options.discard_bright = discard_bright;
+        options.threads = threads;
+        if (!material.is_none()) {
+          const py::dict d = material.cast<py::dict>();
+          auto rgb = [&](const char* key, const Vec3d& fallback) -> Vec3d {
+            if (!d.contains(key)) return fallback;
+            const py::object v = d[key];
+            if (py::isinstance<py::float_>(v) || py::isinstance<py::int_>(v)) {
+              return Vec3d::Constant(v.cast<double>());
+            }
+            return Rows(DoubleArray::ensure(v).reshape({1, 3}), 1, key)[0];
+          };
+          options.material_known = true;
+          options.ambient_term =
+              rgb("ambient", Vec3d::Ones()).cwiseProduct(rgb("ka", Vec3d::Zero()));
+          options.ks = rgb("ks", Vec3d::Zero());
+          options.shininess = d.contains("shininess") ? d["shininess"].cast<double>() : 1.0;
+          if (d.contains("model") && model == "phong") {
+            options.model = reflectance::ParseLobe(d["model"].cast<std::string>());
+          }
+        }
+        solve::NormalResult result;
+        {
+          py::gil_scoped_release release;
+          result = solve::EstimateNormals(data, options);
+        }
+        py::dict out;
+        out["normals"] = ToArray(result.normals);
+        out["albedo"] = ToArray(result.albedo);
+        out["residual"] = ToArray(result.residual);
+        out["model"] = reflectance::LobeName(options.model);
+        out["ks"] = result.ks;
+        out["shininess"] = result.shininess;
+        out["ambient_term"] = result.ambient_term;
+        out["material_estimated"] = result.material_estimated;
+        out["specular_identifiable"] = result.specular_identifiable;
+        out["specular_note"] = result.specular_note;
+        out["summary"] =
+            py::dict(py::arg("message") = result.summary.message,
+                     py::arg("init_seconds") = result.summary.init_seconds,
+                     py::arg("specular_seconds") = result.summary.specular_seconds,
+                     py::arg("solve_seconds") = result.summary.solve_seconds,
+                     py::arg("iterations") = result.summary.iterations,
+                     py::arg("pixels") = result.summary.pixels,
+                     py::arg("dark_pixels") = result.summary.dark_pixels,
+                     py::arg("underdetermined_pixels") = result.summary.underdetermined_pixels);
+        return out;
+      },
+      py::arg("images"), py::arg("light_directions"), py::arg("light_intensities") = py::none(),
+      py::arg("mask") = py::none(), py::arg("model") = "phong", py::arg("material") = py::none(),
+      py::arg("discard_dark") = 0.3, py::arg("discard_bright") = 0.1, py::arg("threads") = 0,
+      R"doc(Recover per-pixel normals and albedo (see `iphong normals`).
+
+images (K, H, W, 3) linear float; light_directions (K, 3) from the surface toward the light;
+light_intensities (K, 3) or None (ones); mask (H, W) bool or None; model "phong",
+"blinn-phong" or "lambert" (Woodham); material: dict with ka, ks, shininess, ambient (and model)
+when the coefficients are known, else they are estimated.
+Returns normals (H, W, 3), albedo (H, W, 3), residual (H, W; -1 where no normal was found),
+the specular coefficients used or estimated, and a summary.)doc");
+
+  m.def(
+      "angular_error",
+      [](const py::object& estimate, const py::object& ground_truth, const py::object& mask_in) {
+        const ImageF e = ToImage(estimate, "estimate"), g = ToImage(ground_truth, "ground_truth");
+        const solve::AngularErrorMetrics m =
+            solve::CompareNormals(e, g, ToMask(mask_in, e.width, e.height));
+        py::dict out;
+        out["mean_deg"] = m.mean_deg;
+        out["median_deg"] = m.median_deg;
+        out["below_5_deg"] = m.below_5_deg;
+        out["below_10_deg"] = m.below_10_deg;
+        out["below_20_deg"] = m.below_20_deg;
+        out["pixels"] = m.pixels;
+        out["error_deg"] = ToArray(m.error_deg);
+        return out;
+      },
+      py::arg("estimate"), py::arg("ground_truth"), py::arg("mask") = py::none(),
+      "Angular error statistics (degrees) and the per-pixel error map, over the mask where the "
+      "ground truth is non-zero.");
+}
+
+}  // namespace iphong::python

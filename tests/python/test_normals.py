@@ -1,0 +1,75 @@
+"""iphong.estimate_normals / angular_error: arrays in, arrays out, round trips with iphong.render."""
+import numpy as np
+import pytest
+
+import iphong
+from test_render import DATA
+
+MATERIAL = {"ka": 0.02, "kd": [0.7, 0.5, 0.3], "ks": 0.4, "shininess": 20}
+SCENE = {"width": 80, "height": 80, "ambient": 1.0,
+         "lights": [{"type": "hemisphere", "count": 20, "min_elevation_deg": 30, "intensity": [1, 0.9, 0.8]}],
+         "objects": [{"shape": "sphere", "radius": 0.9, "subdivisions": 6, "material": MATERIAL}]}
+
+
+def test_round_trip_with_known_material():
+    out = iphong.render(SCENE, per_light=True)
+    r = iphong.estimate_normals(out["images"], out["light_directions"], out["light_intensities"],
+                                out["mask"], material=dict(MATERIAL, ambient=1.0))
+    e = iphong.angular_error(r["normals"], out["normals"], out["mask"])
+    assert e["mean_deg"] < 0.01
+    assert r["normals"].shape == (80, 80, 3) and r["residual"].shape == (80, 80)
+    np.testing.assert_allclose(r["albedo"][out["mask"]].mean(0), MATERIAL["kd"], atol=2e-3)
+    assert not r["material_estimated"]
+
+
+def test_unknown_material_is_estimated():
+    out = iphong.render(SCENE, per_light=True)
+    r = iphong.estimate_normals(out["images"], out["light_directions"], out["light_intensities"], out["mask"])
+    assert r["material_estimated"]
+    assert r["shininess"] == pytest.approx(20, rel=0.1)
+    np.testing.assert_allclose(r["ks"], 0.4, atol=0.04)
+    lambert = iphong.estimate_normals(out["images"], out["light_directions"], out["light_intensities"],
+                                      out["mask"], model="lambert")
+    e = iphong.angular_error(r["normals"], out["normals"], out["mask"])["mean_deg"]
+    w = iphong.angular_error(lambert["normals"], out["normals"], out["mask"])["mean_deg"]
+    assert e < 0.5 < w
+
+
+def test_bad_arrays_raise_value_error():
+    images = np.zeros((4, 8, 8, 3), np.float32)
+    lights = np.tile([0.0, 0.0, 1.0], (4, 1))
+    with pytest.raises(ValueError, match=r"light_directions must have shape \(4, 3\)"):
+        iphong.estimate_normals(images, lights[:3])
+    with pytest.raises(ValueError, match=r"images must have shape \(K, H, W, 3\)"):
+        iphong.estimate_normals(images[..., :2], lights)
+    with pytest.raises(ValueError, match="at least 3 images"):
+        iphong.estimate_normals(images[:2], lights[:2])
+    with pytest.raises(ValueError, match=r"mask must have shape"):
+        iphong.estimate_normals(images, lights, mask=np.ones((4, 4), bool))
+    bad = images.copy()
+    bad[1, 2, 2, 0] = np.nan
+    with pytest.raises(ValueError, match="non-finite"):
+        iphong.estimate_normals(bad, lights)
+
+
+def test_dark_pixels_give_flags_not_nan():
+    out = iphong.render(dict(SCENE, width=32, height=32), per_light=True)
+    images = out["images"].copy()
+    images[:, 16, 16] = 0
+    r = iphong.estimate_normals(images, out["light_directions"], out["light_intensities"], out["mask"])
+    assert np.isfinite(r["normals"]).all()
+    assert r["residual"][16, 16] == -1
+    assert r["summary"]["dark_pixels"] == 1
+
+
+def test_real_ball_beats_woodham():
+    ball = DATA / "diligent-crop8" / "ball"
+    if not ball.exists():
+        pytest.skip(f"no real data at {ball}")
+    d = iphong.load_dataset(ball)
+    args = (d["images"], d["light_directions"], d["light_intensities"], d["mask"])
+    phong = iphong.angular_error(iphong.estimate_normals(*args)["normals"], d["normal_gt"], d["mask"])
+    woodham = iphong.angular_error(iphong.estimate_normals(*args, model="lambert", discard_dark=0,
+                                                           discard_bright=0)["normals"],
+                                   d["normal_gt"], d["mask"])
+    assert phong["mean_deg"] < 2.6 < 4.0 < woodham["mean_deg"]
