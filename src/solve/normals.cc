@@ -47,8 +47,17 @@ struct PixelSolution {
 };
 
 // Woodham on the luminance of (I − ambient)/E over the kept observations.
+// (LᵀL)⁻¹Lᵀ for all lights: Woodham without selection is one 3×K product per pixel.
+Eigen::Matrix3Xd PseudoInverse(const PhotometricData& data) {
+  Eigen::Matrix3Xd l(3, data.images);
+  for (int j = 0; j < data.images; ++j) l.col(j) = data.light_directions[j];
+  const Eigen::Matrix3d ata = l * l.transpose();
+  if (Eigen::LDLT<Eigen::Matrix3d>(ata).rcond() < 1e-9) return Eigen::Matrix3Xd();  // degenerate
+  return ata.inverse() * l;
+}
+
 PixelSolution Woodham(const PhotometricData& data, std::size_t p, const NormalOptions& o,
-                      std::vector<std::pair<double, int>>& order) {
+                      const Eigen::Matrix3Xd& pinv, std::vector<std::pair<double, int>>& order) {
   const int k = data.images;
   const float* obs = data.pixel(p);
   order.clear();
@@ -64,26 +73,34 @@ PixelSolution Woodham(const PhotometricData& data, std::size_t p, const NormalOp
     s.status = PixelStatus::kDark;
     return s;
   }
-  std::sort(order.begin(), order.end());
   int first = static_cast<int>(std::floor(o.discard_dark * k));
   int last = k - static_cast<int>(std::floor(o.discard_bright * k));
   if (last - first < 3) {
     first = 0;
     last = k;
   }
-  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
-  Vec3d atb = Vec3d::Zero();
-  for (int i = first; i < last; ++i) {
-    const Vec3d& l = data.light_directions[order[i].second];
-    ata += l * l.transpose();
-    atb += l * order[i].first;
+  Vec3d b;
+  if (first == 0 && last == k && pinv.cols() == k) {
+    b = Vec3d::Zero();
+    for (int j = 0; j < k; ++j) b += pinv.col(order[j].second) * order[j].first;
+  } else {
+    // Only the two cut-offs matter, not the full order: two selections, O(K).
+    if (first > 0) std::nth_element(order.begin(), order.begin() + first, order.end());
+    if (last < k) std::nth_element(order.begin() + first, order.begin() + last, order.end());
+    Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+    Vec3d atb = Vec3d::Zero();
+    for (int i = first; i < last; ++i) {
+      const Vec3d& l = data.light_directions[order[i].second];
+      ata += l * l.transpose();
+      atb += l * order[i].first;
+    }
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(ata);
+    if (last - first < 3 || ldlt.rcond() < 1e-9) {
+      s.status = PixelStatus::kUnderdetermined;
+      return s;
+    }
+    b = ldlt.solve(atb);
   }
-  const Eigen::LDLT<Eigen::Matrix3d> ldlt(ata);
-  if (last - first < 3 || ldlt.rcond() < 1e-9) {
-    s.status = PixelStatus::kUnderdetermined;
-    return s;
-  }
-  const Vec3d b = ldlt.solve(atb);
   if (!(b.norm() > 1e-12) || !b.allFinite()) {
     s.status = PixelStatus::kDark;
     return s;
@@ -117,18 +134,21 @@ PixelSolution Woodham(const PhotometricData& data, std::size_t p, const NormalOp
 }
 
 // The per-pixel model with the albedo eliminated: residuals as a function of the normal only.
+// It works on the luminance of (I_j − Ia⊙ka)/E_j, which under the model is exactly
+// lum(kd)·(N·L_j)⁺ + lum(ks)·lobe_j (luminance is linear): one residual per image instead of
+// three. The RGB albedo follows in closed form once the normal is known.
 struct PixelCost {
   const PhotometricData* data = nullptr;
-  const float* obs = nullptr;
-  const double* weight = nullptr;  // K × 3, 0 for unused observations
+  const double* gray = nullptr;    // K observations
+  const double* weight = nullptr;  // K, 0 for unused observations
   Vec3d n0, t1, t2;                // tangent-plane chart: N = normalize(n0 + x0 t1 + x1 t2)
-  Vec3d ambient, ks;
+  double ks_gray = 0;
   double shininess = 1;
   reflectance::ModelOptions model;
   mutable std::vector<double> scratch_d;  // N·L and lobe per light, reused between calls
   mutable std::vector<Jet2> scratch_j;
 
-  int NumResiduals() const { return 3 * data->images; }
+  int NumResiduals() const { return data->images; }
 
   template <typename T>
   std::vector<T>& Scratch() const {
@@ -145,56 +165,45 @@ struct PixelCost {
     return n / n.norm();
   }
 
-  // Residuals (weighted) for normal N; the albedo that minimizes them goes to *albedo.
+  // Per light: (N·L)⁺ and the specular lobe, into the scratch buffer.
   template <typename T>
-  void Evaluate(const Vec3T<T>& normal, T* residuals, Vec3T<T>* albedo) const {
+  std::vector<T>& Shading(const Vec3T<T>& normal) const {
     const int k = data->images;
     std::vector<T>& s = Scratch<T>();
     s.resize(2 * k);
     const Vec3T<T> view = kView.cast<T>();
     const T n_shine = T(shininess);
-    Vec3T<T> num = Vec3T<T>::Zero(), den = Vec3T<T>::Zero();
     for (int j = 0; j < k; ++j) {
       const Vec3T<T> l = data->light_directions[j].cast<T>();
       const T nl = normal.dot(l);
-      T& nl_plus = s[2 * j];
-      T& lobe = s[2 * j + 1];
       if (nl > T(0)) {
-        nl_plus = nl;
-        lobe = reflectance::SpecularLobe<T>(normal, view, l, n_shine, model);
+        s[2 * j] = nl;
+        s[2 * j + 1] =
+            ks_gray > 0 ? reflectance::SpecularLobe<T>(normal, view, l, n_shine, model) : T(0);
       } else {
-        nl_plus = T(0);
-        lobe = T(0);
-      }
-      for (int c = 0; c < 3; ++c) {
-        const double w = weight[3 * j + c];
-        if (w == 0) continue;
-        const double e = data->light_intensities[j][c];
-        const T target = T(obs[3 * j + c] - ambient[c]) - T(e * ks[c]) * lobe;
-        num[c] += T(w * e) * nl_plus * target;
-        den[c] += T(w * e * e) * nl_plus * nl_plus;
+        s[2 * j] = T(0);
+        s[2 * j + 1] = T(0);
       }
     }
-    Vec3T<T> kd;
-    for (int c = 0; c < 3; ++c) {
-      kd[c] = den[c] > T(1e-12) ? num[c] / den[c] : T(0);
-      if (kd[c] < T(0)) kd[c] = T(0);
-    }
-    if (albedo) *albedo = kd;
-    if (!residuals) return;
-    for (int j = 0; j < k; ++j) {
-      for (int c = 0; c < 3; ++c) {
-        const double w = weight[3 * j + c];
-        const double e = data->light_intensities[j][c];
-        const T pred = T(ambient[c]) + T(e) * (kd[c] * s[2 * j] + T(ks[c]) * s[2 * j + 1]);
-        residuals[3 * j + c] = T(std::sqrt(w)) * (T(obs[3 * j + c]) - pred);
-      }
-    }
+    return s;
   }
 
   template <typename T>
   bool operator()(const T* x, T* residuals) const {
-    Evaluate<T>(Normal(x), residuals, nullptr);
+    const int k = data->images;
+    const std::vector<T>& s = Shading<T>(Normal(x));
+    T num = T(0), den = T(0);
+    for (int j = 0; j < k; ++j) {
+      if (weight[j] == 0) continue;
+      num += T(weight[j]) * s[2 * j] * (T(gray[j]) - T(ks_gray) * s[2 * j + 1]);
+      den += T(weight[j]) * s[2 * j] * s[2 * j];
+    }
+    T kd = den > T(1e-12) ? num / den : T(0);
+    if (kd < T(0)) kd = T(0);
+    for (int j = 0; j < k; ++j) {
+      residuals[j] =
+          T(std::sqrt(weight[j])) * (T(gray[j]) - kd * s[2 * j] - T(ks_gray) * s[2 * j + 1]);
+    }
     return true;
   }
 };
@@ -205,27 +214,30 @@ using PixelFunction = ceres::TinySolverAutoDiffFunction<PixelCost, Eigen::Dynami
 struct PixelFitter {
   const PhotometricData& data;
   const NormalOptions& options;
+  const Vec3d ks;
   PixelCost cost;
   PixelFunction function;
   ceres::TinySolver<PixelFunction> solver;
-  std::vector<double> weights, residuals;
+  std::vector<double> gray, usable, weights, residuals;
 
-  PixelFitter(const PhotometricData& d, const NormalOptions& o, const Vec3d& ks, double shininess)
-      : data(d), options(o), cost(MakeCost(d, o, ks, shininess)), function(cost) {
+  PixelFitter(const PhotometricData& d, const NormalOptions& o, const Vec3d& fit_ks,
+              double shininess)
+      : data(d), options(o), ks(fit_ks), cost(MakeCost(d, o, fit_ks, shininess)), function(cost) {
     solver.options.max_num_iterations = o.max_iterations;
     solver.options.parameter_tolerance = 1e-10;
     solver.options.function_tolerance = 1e-10;
     solver.options.gradient_tolerance = 1e-14;
-    weights.resize(3 * d.images);
-    residuals.resize(3 * d.images);
+    gray.resize(d.images);
+    usable.resize(d.images);
+    weights.resize(d.images);
+    residuals.resize(d.images);
   }
 
   static PixelCost MakeCost(const PhotometricData& d, const NormalOptions& o, const Vec3d& ks,
                             double shininess) {
     PixelCost c;
     c.data = &d;
-    c.ambient = o.ambient_term;
-    c.ks = ks;
+    c.ks_gray = Luminance(ks);
     c.shininess = shininess;
     c.model.lobe = o.model;
     return c;
@@ -235,21 +247,22 @@ struct PixelFitter {
   void Fit(std::size_t p, PixelSolution& s) {
     const int k = data.images;
     const float* obs = data.pixel(p);
-    cost.obs = obs;
     double mean = 0;
-    int usable = 0;
+    int count = 0;
     for (int j = 0; j < k; ++j) {
-      bool saturated = false;
-      for (int c = 0; c < 3; ++c) saturated |= obs[3 * j + c] >= options.saturation;
-      for (int c = 0; c < 3; ++c) usable_[3 * j + c] = saturated ? 0.0 : 1.0;
+      const Vec3d rgb(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]);
+      const bool saturated = rgb.maxCoeff() >= options.saturation;
+      usable[j] = saturated ? 0.0 : 1.0;
+      gray[j] = Luminance((rgb - options.ambient_term).cwiseQuotient(data.light_intensities[j]));
       if (!saturated) {
-        ++usable;
-        for (int c = 0; c < 3; ++c) mean += obs[3 * j + c];
+        mean += std::abs(gray[j]);
+        ++count;
       }
     }
-    if (usable < 3) return;  // keep Woodham's answer
-    const double scale = options.robust_scale * std::max(mean / (3.0 * usable), 1e-6);
-    weights = usable_;
+    if (count < 3) return;  // keep Woodham's answer
+    const double scale = options.robust_scale * std::max(mean / count, 1e-6);
+    cost.gray = gray.data();
+    weights = usable;
     Vec3d normal = s.normal;
     for (int round = 0; round < options.irls_rounds; ++round) {
       cost.weight = weights.data();
@@ -259,27 +272,52 @@ struct PixelFitter {
       const auto summary = solver.Solve(function, &x);
       s.iterations += summary.iterations;
       normal = cost.Normal(x.data());
-      // Cauchy weights from the unweighted residuals of the usable observations.
-      cost.weight = usable_.data();
-      cost.Evaluate<double>(normal, residuals.data(), nullptr);
-      for (int i = 0; i < 3 * k; ++i) {
-        const double r = residuals[i] / scale;
-        weights[i] = usable_[i] / (1.0 + r * r);
+      // Cauchy weights from the unweighted residuals of the usable observations, at the new
+      // normal (x = 0 once the chart is re-centred there).
+      cost.n0 = normal;
+      Tangents(normal, &cost.t1, &cost.t2);
+      cost.weight = usable.data();
+      const double zero[2] = {0, 0};
+      cost(zero, residuals.data());
+      for (int j = 0; j < k; ++j) {
+        const double r = residuals[j] / scale;
+        weights[j] = usable[j] / (1.0 + r * r);
       }
     }
     s.normal = normal;
-    // Albedo and RMS residual over the usable observations, unweighted.
-    cost.weight = usable_.data();
-    Vec3d albedo;
-    cost.Evaluate<double>(normal, residuals.data(), &albedo);
-    s.albedo = albedo;
-    double sq = 0;
-    for (int i = 0; i < 3 * k; ++i) sq += residuals[i] * residuals[i];
-    s.residual = std::sqrt(sq / (3.0 * usable));
+    RgbAlbedoAndResidual(obs, normal, s);
   }
 
- private:
-  std::vector<double> usable_ = std::vector<double>(3 * data.images);
+  // Closed-form RGB albedo with the final weights; RMS residual over usable observations.
+  void RgbAlbedoAndResidual(const float* obs, const Vec3d& normal, PixelSolution& s) {
+    const int k = data.images;
+    const std::vector<double>& shading = cost.Shading<double>(normal);
+    Vec3d num = Vec3d::Zero(), den = Vec3d::Zero();
+    for (int j = 0; j < k; ++j) {
+      const double w = weights[j];
+      if (w == 0) continue;
+      for (int c = 0; c < 3; ++c) {
+        const double e = data.light_intensities[j][c];
+        num[c] += w * e * shading[2 * j] *
+                  (obs[3 * j + c] - options.ambient_term[c] - e * ks[c] * shading[2 * j + 1]);
+        den[c] += w * e * e * shading[2 * j] * shading[2 * j];
+      }
+    }
+    s.albedo = num.cwiseQuotient(den.cwiseMax(1e-12)).cwiseMax(0.0);
+    double sq = 0;
+    int used = 0;
+    for (int j = 0; j < k; ++j) {
+      if (usable[j] == 0) continue;
+      for (int c = 0; c < 3; ++c) {
+        const double e = data.light_intensities[j][c];
+        const double pred = options.ambient_term[c] +
+                            e * (s.albedo[c] * shading[2 * j] + ks[c] * shading[2 * j + 1]);
+        sq += std::pow(obs[3 * j + c] - pred, 2);
+        ++used;
+      }
+    }
+    s.residual = std::sqrt(sq / std::max(used, 1));
+  }
 };
 
 // Global fit of ks (RGB), log-shininess and the ambient term Ia⊙ka (RGB) over sampled pixels,
@@ -422,10 +460,11 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
   result.summary.pixels = pixels;
 
   auto start = Clock::now();
+  const Eigen::Matrix3Xd pinv = PseudoInverse(data);
   ParallelFor(0, pixels, 1024, options.threads, [&](std::size_t b, std::size_t e) {
     std::vector<std::pair<double, int>> order;
     order.reserve(data.images);
-    for (std::size_t p = b; p < e; ++p) solutions[p] = Woodham(data, p, options, order);
+    for (std::size_t p = b; p < e; ++p) solutions[p] = Woodham(data, p, options, pinv, order);
   });
   result.summary.init_seconds = Seconds(start);
 

@@ -43,7 +43,7 @@ struct NormalOptions {
   Vec3d ks = Vec3d::Zero();
   double shininess = 1;
   int specular_rounds = 2;
-  int specular_sample = 3000;  // pixels in the global fit
+  int specular_sample = 1000;  // pixels in the global fit
 
   int threads = 0;
   // Called with the fraction done (0..1) from worker threads; must be thread-safe.
