@@ -219,6 +219,8 @@ struct PixelFitter {
   PixelFunction function;
   ceres::TinySolver<PixelFunction> solver;
   std::vector<double> gray, usable, weights, residuals;
+  std::vector<std::pair<double, int>> order;
+  NormalOptions darker;  // Woodham on the darker observations: the second start
 
   PixelFitter(const PhotometricData& d, const NormalOptions& o, const Vec3d& fit_ks,
               double shininess)
@@ -229,6 +231,10 @@ struct PixelFitter {
     solver.options.gradient_tolerance = 1e-14;
     gray.resize(d.images);
     usable.resize(d.images);
+    order.reserve(d.images);
+    darker = o;
+    darker.discard_dark = 0.2;
+    darker.discard_bright = 0.4;
     weights.resize(d.images);
     residuals.resize(d.images);
   }
@@ -241,6 +247,30 @@ struct PixelFitter {
     c.shininess = shininess;
     c.model.lobe = o.model;
     return c;
+  }
+
+  // Refines `s` (from Woodham); where the fit leaves more than `restart_residual` of the pixel's
+  // brightness unexplained, it also starts from Woodham on the darker observations (highlights
+  // bias the first start toward a local minimum) and keeps the better of the two.
+  void FitWithRestart(std::size_t p, PixelSolution& s) {
+    Fit(p, s);
+    if (!(s.residual > options.restart_residual * MeanObservation(p))) return;
+    PixelSolution second = Woodham(data, p, darker, Eigen::Matrix3Xd(), order);
+    if (second.status != PixelStatus::kSolved) return;
+    second.iterations = 0;
+    Fit(p, second);
+    s.iterations += second.iterations;
+    if (second.residual < s.residual) {
+      second.iterations = s.iterations;
+      s = second;
+    }
+  }
+
+  double MeanObservation(std::size_t p) const {
+    const float* obs = data.pixel(p);
+    double sum = 0;
+    for (int i = 0; i < 3 * data.images; ++i) sum += obs[i];
+    return std::max(sum / (3 * data.images), 1e-9);
   }
 
   // Refines `s` (from Woodham) in place. Buffers are the fitter's: nothing is allocated here.
@@ -482,7 +512,7 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
       long long local = 0;
       for (std::size_t p = b; p < e; ++p) {
         if (target[p].status != PixelStatus::kSolved) continue;
-        fitter.Fit(p, target[p]);
+        fitter.FitWithRestart(p, target[p]);
         local += target[p].iterations;
       }
       iterations += local;
@@ -511,7 +541,7 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
       NormalOptions with_ambient = options;
       with_ambient.ambient_term = fit.ambient;
       PixelFitter fitter(data, with_ambient, fit.ks, fit.shininess);
-      for (std::size_t p : sample) fitter.Fit(p, refined[p]);
+      for (std::size_t p : sample) fitter.FitWithRestart(p, refined[p]);
       for (std::size_t p : sample) solutions[p].normal = refined[p].normal;
     }
     const double gain =

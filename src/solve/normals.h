@@ -35,6 +35,9 @@ struct NormalOptions {
   // Cauchy scale relative to the pixel's mean observation.
   double robust_scale = 0.15;
   int irls_rounds = 3;
+  // A fit whose RMS residual exceeds this fraction of the pixel's mean value is restarted from
+  // Woodham on the darker observations (guards against local minima near highlights).
+  double restart_residual = 0.02;
   int max_iterations = 10;  // per pixel and round
 
   // Known coefficients (material.json). Otherwise ks and shininess are estimated.
