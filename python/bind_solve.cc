@@ -65,7 +65,8 @@ void BindSolve(py::module_& m) {
       "estimate_normals",
       [](const py::object& images_in, const py::object& light_directions,
          const py::object& light_intensities, const py::object& mask_in, const std::string& model,
-         const py::object& material, double discard_dark, double discard_bright, int threads) {
+         const py::object& material, double discard_dark, double discard_bright, bool fast,
+         int threads) {
         FloatArray images = FloatArray::ensure(images_in);
         if (!images || images.ndim() != 4 || images.shape(3) != 3) {
           throw std::invalid_argument("images must have shape (K, H, W, 3)");
@@ -91,6 +92,7 @@ void BindSolve(py::module_& m) {
         options.discard_dark = discard_dark;
         options.discard_bright = discard_bright;
         options.threads = threads;
+        options.color_residuals = !fast;
         if (!material.is_none()) {
           const py::dict d = material.cast<py::dict>();
           auto rgb = [&](const char* key, const Vec3d& fallback) -> Vec3d {
@@ -139,7 +141,8 @@ void BindSolve(py::module_& m) {
       },
       py::arg("images"), py::arg("light_directions"), py::arg("light_intensities") = py::none(),
       py::arg("mask") = py::none(), py::arg("model") = "phong", py::arg("material") = py::none(),
-      py::arg("discard_dark") = 0.3, py::arg("discard_bright") = 0.1, py::arg("threads") = 0,
+      py::arg("discard_dark") = 0.3, py::arg("discard_bright") = 0.1, py::arg("fast") = false,
+      py::arg("threads") = 0,
       R"doc(Recover per-pixel normals and albedo (see `iphong normals`).
 
 images (K, H, W, 3) linear float; light_directions (K, 3) from the surface toward the light;

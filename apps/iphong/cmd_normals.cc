@@ -34,6 +34,7 @@ struct NormalsCommandOptions {
   std::string convention = "opengl";
   double robust_scale = solve::NormalOptions{}.robust_scale;
   int irls_rounds = solve::NormalOptions{}.irls_rounds;
+  bool fast = false;
   int threads = 0;
 };
 
@@ -63,6 +64,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   options.threads = o.threads;
   options.robust_scale = o.robust_scale;
   options.irls_rounds = o.irls_rounds;
+  options.color_residuals = !o.fast;
   if (dataset.material && !o.ignore_material) {
     options.model = dataset.material->model;
     options.material_known = true;

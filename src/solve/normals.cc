@@ -43,6 +43,7 @@ struct PixelSolution {
   Vec3d normal = Vec3d(0, 0, 1);
   Vec3d albedo = Vec3d::Zero();
   double residual = -1;
+  double robust_cost = 0;  // Σ log(1 + (r/σ)²) of the luminance residuals, for choosing a start
   int iterations = 0;
 };
 
@@ -134,21 +135,23 @@ PixelSolution Woodham(const PhotometricData& data, std::size_t p, const NormalOp
 }
 
 // The per-pixel model with the albedo eliminated: residuals as a function of the normal only.
-// It works on the luminance of (I_j − Ia⊙ka)/E_j, which under the model is exactly
-// lum(kd)·(N·L_j)⁺ + lum(ks)·lobe_j (luminance is linear): one residual per image instead of
-// three. The RGB albedo follows in closed form once the normal is known.
+// Observations are y = (I_j − Ia⊙ka)/E_j, which under the model equal kd·(N·L_j)⁺ + ks·lobe_j per
+// channel. With `channels` = 1 they are reduced to their luminance (exact under the model, since
+// luminance is linear; a third of the residuals); with 3 each channel keeps its own albedo, which
+// is more accurate on real photos whose colours depart from the model.
 struct PixelCost {
   const PhotometricData* data = nullptr;
-  const double* gray = nullptr;    // K observations
+  int channels = 3;
+  const double* y = nullptr;       // K × channels
   const double* weight = nullptr;  // K, 0 for unused observations
   Vec3d n0, t1, t2;                // tangent-plane chart: N = normalize(n0 + x0 t1 + x1 t2)
-  double ks_gray = 0;
+  Vec3d ks = Vec3d::Zero();        // per channel (luminance in [0] when channels = 1)
   double shininess = 1;
   reflectance::ModelOptions model;
   mutable std::vector<double> scratch_d;  // N·L and lobe per light, reused between calls
   mutable std::vector<Jet2> scratch_j;
 
-  int NumResiduals() const { return data->images; }
+  int NumResiduals() const { return data->images * channels; }
 
   template <typename T>
   std::vector<T>& Scratch() const {
@@ -173,13 +176,14 @@ struct PixelCost {
     s.resize(2 * k);
     const Vec3T<T> view = kView.cast<T>();
     const T n_shine = T(shininess);
+    const bool specular = ks.maxCoeff() > 0;
     for (int j = 0; j < k; ++j) {
       const Vec3T<T> l = data->light_directions[j].cast<T>();
       const T nl = normal.dot(l);
       if (nl > T(0)) {
         s[2 * j] = nl;
         s[2 * j + 1] =
-            ks_gray > 0 ? reflectance::SpecularLobe<T>(normal, view, l, n_shine, model) : T(0);
+            specular ? reflectance::SpecularLobe<T>(normal, view, l, n_shine, model) : T(0);
       } else {
         s[2 * j] = T(0);
         s[2 * j + 1] = T(0);
@@ -188,21 +192,31 @@ struct PixelCost {
     return s;
   }
 
+  // The albedo per channel that minimizes the weighted residuals for this shading.
+  template <typename T>
+  T Albedo(const std::vector<T>& s, int c) const {
+    const int k = data->images;
+    T num = T(0), den = T(0);
+    for (int j = 0; j < k; ++j) {
+      if (weight[j] == 0) continue;
+      num += T(weight[j]) * s[2 * j] * (T(y[j * channels + c]) - T(ks[c]) * s[2 * j + 1]);
+      den += T(weight[j]) * s[2 * j] * s[2 * j];
+    }
+    T kd = den > T(1e-12) ? num / den : T(0);
+    return kd < T(0) ? T(0) : kd;
+  }
+
   template <typename T>
   bool operator()(const T* x, T* residuals) const {
     const int k = data->images;
     const std::vector<T>& s = Shading<T>(Normal(x));
-    T num = T(0), den = T(0);
-    for (int j = 0; j < k; ++j) {
-      if (weight[j] == 0) continue;
-      num += T(weight[j]) * s[2 * j] * (T(gray[j]) - T(ks_gray) * s[2 * j + 1]);
-      den += T(weight[j]) * s[2 * j] * s[2 * j];
-    }
-    T kd = den > T(1e-12) ? num / den : T(0);
-    if (kd < T(0)) kd = T(0);
-    for (int j = 0; j < k; ++j) {
-      residuals[j] =
-          T(std::sqrt(weight[j])) * (T(gray[j]) - kd * s[2 * j] - T(ks_gray) * s[2 * j + 1]);
+    for (int c = 0; c < channels; ++c) {
+      const T kd = Albedo(s, c);
+      for (int j = 0; j < k; ++j) {
+        residuals[j * channels + c] =
+            T(std::sqrt(weight[j])) *
+            (T(y[j * channels + c]) - kd * s[2 * j] - T(ks[c]) * s[2 * j + 1]);
+      }
     }
     return true;
   }
@@ -229,21 +243,22 @@ struct PixelFitter {
     solver.options.parameter_tolerance = 1e-10;
     solver.options.function_tolerance = 1e-10;
     solver.options.gradient_tolerance = 1e-14;
-    gray.resize(d.images);
+    gray.resize(3 * d.images);
     usable.resize(d.images);
     order.reserve(d.images);
     darker = o;
     darker.discard_dark = 0.2;
     darker.discard_bright = 0.4;
     weights.resize(d.images);
-    residuals.resize(d.images);
+    residuals.resize(3 * d.images);
   }
 
   static PixelCost MakeCost(const PhotometricData& d, const NormalOptions& o, const Vec3d& ks,
                             double shininess) {
     PixelCost c;
     c.data = &d;
-    c.ks_gray = Luminance(ks);
+    c.channels = o.color_residuals ? 3 : 1;
+    c.ks = o.color_residuals ? ks : Vec3d(Luminance(ks), 0, 0);
     c.shininess = shininess;
     c.model.lobe = o.model;
     return c;
@@ -260,7 +275,7 @@ struct PixelFitter {
     second.iterations = 0;
     Fit(p, second);
     s.iterations += second.iterations;
-    if (second.residual < s.residual) {
+    if (second.robust_cost < s.robust_cost) {
       second.iterations = s.iterations;
       s = second;
     }
@@ -283,15 +298,20 @@ struct PixelFitter {
       const Vec3d rgb(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]);
       const bool saturated = rgb.maxCoeff() >= options.saturation;
       usable[j] = saturated ? 0.0 : 1.0;
-      gray[j] = Luminance((rgb - options.ambient_term).cwiseQuotient(data.light_intensities[j]));
+      const Vec3d y = (rgb - options.ambient_term).cwiseQuotient(data.light_intensities[j]);
+      if (cost.channels == 1) {
+        gray[j] = Luminance(y);
+      } else {
+        for (int c = 0; c < 3; ++c) gray[3 * j + c] = y[c];
+      }
       if (!saturated) {
-        mean += std::abs(gray[j]);
+        mean += std::abs(Luminance(y));
         ++count;
       }
     }
     if (count < 3) return;  // keep Woodham's answer
     const double scale = options.robust_scale * std::max(mean / count, 1e-6);
-    cost.gray = gray.data();
+    cost.y = gray.data();
     weights = usable;
     Vec3d normal = s.normal;
     for (int round = 0; round < options.irls_rounds; ++round) {
@@ -309,12 +329,25 @@ struct PixelFitter {
       cost.weight = usable.data();
       const double zero[2] = {0, 0};
       cost(zero, residuals.data());
+      // One weight per image: a cast shadow or highlight affects every channel.
+      const int ch = cost.channels;
       for (int j = 0; j < k; ++j) {
-        const double r = residuals[j] / scale;
-        weights[j] = usable[j] / (1.0 + r * r);
+        double r2 = 0;
+        for (int c = 0; c < ch; ++c) r2 += std::pow(residuals[j * ch + c] / scale, 2);
+        weights[j] = usable[j] / (1.0 + r2 / ch);
       }
     }
     s.normal = normal;
+    // The robust cost at the final normal, same σ for every start of this pixel.
+    cost.n0 = normal;
+    Tangents(normal, &cost.t1, &cost.t2);
+    cost.weight = usable.data();
+    const double zero[2] = {0, 0};
+    cost(zero, residuals.data());
+    s.robust_cost = 0;
+    for (int i = 0; i < k * cost.channels; ++i) {
+      s.robust_cost += std::log1p(std::pow(residuals[i] / scale, 2));
+    }
     RgbAlbedoAndResidual(obs, normal, s);
   }
 

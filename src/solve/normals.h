@@ -8,8 +8,10 @@
 //    autodiff. The unknowns are 2: the normal on a tangent-plane chart around the current estimate
 //    (re-centred every round, so the chart never degenerates). The RGB albedo is linear in the
 //    residuals and eliminated in closed form inside the functor (variable projection). Cauchy
-//    weights (iteratively reweighted) absorb cast shadows and interreflections; attached shadows
-//    are in the model (N·L ≤ 0 gives the ambient value); saturated observations are dropped.
+//    weights (iteratively reweighted, one per image) absorb cast shadows and interreflections;
+//    attached shadows are in the model (N·L ≤ 0 gives the ambient value); saturated observations
+//    are dropped. Where the residual stays large, a second start from Woodham on the darker
+//    observations guards against local minima near highlights; the lower robust cost wins.
 // 3. Without known coefficients, ks (RGB), the shininess and the ambient term Ia⊙ka (RGB) are
 //    estimated jointly with the normals: rounds of a
 //    global Ceres fit over a sample of pixels (normals fixed, albedo eliminated) alternate with
@@ -38,6 +40,9 @@ struct NormalOptions {
   // A fit whose RMS residual exceeds this fraction of the pixel's mean value is restarted from
   // Woodham on the darker observations (guards against local minima near highlights).
   double restart_residual = 0.02;
+  // Fit the normal to all three channels (each with its own albedo). Off: to their luminance,
+  // exact under the model and about twice as fast, a little less accurate on real photos.
+  bool color_residuals = true;
   int max_iterations = 10;  // per pixel and round
 
   // Known coefficients (material.json). Otherwise ks and shininess are estimated.
