@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "bindings.h"
+#include "solve/few_images.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
 
@@ -112,6 +113,37 @@ void BindSolve(py::module_& m) {
             options.model = reflectance::ParseLobe(d["model"].cast<std::string>());
           }
         }
+        if (k < 3) {
+          // One or two images: the global solver with priors; the albedo must be known.
+          if (material.is_none() || !material.cast<py::dict>().contains("kd")) {
+            throw std::invalid_argument(
+                "with 1 or 2 images pass material={'kd': ..., ...}: the coefficients must be "
+                "known");
+          }
+          solve::FewImageOptions few;
+          few.model = options.model;
+          few.material.ka = Vec3d::Zero();
+          few.material.kd = Rows(
+              DoubleArray::ensure(material.cast<py::dict>()["kd"]).reshape({1, 3}), 1, "kd")[0];
+          few.material.ks = options.ks;
+          few.material.shininess = options.shininess;
+          few.ambient_term = options.ambient_term;
+          few.threads = threads;
+          solve::FewImageResult r;
+          {
+            py::gil_scoped_release release;
+            r = solve::EstimateNormalsFewImages(data, few);
+          }
+          py::dict out;
+          out["normals"] = ToArray(r.normals);
+          out["residual"] = ToArray(r.residual);
+          out["ambiguity_deg"] = ToArray(r.ambiguity_deg);
+          out["model"] = reflectance::LobeName(few.model);
+          out["summary"] =
+              py::dict(py::arg("message") = r.message, py::arg("solve_seconds") = r.solve_seconds,
+                       py::arg("iterations") = r.iterations);
+          return out;
+        }
         solve::NormalResult result;
         {
           py::gil_scoped_release release;
@@ -150,7 +182,9 @@ light_intensities (K, 3) or None (ones); mask (H, W) bool or None; model "phong"
 "blinn-phong" or "lambert" (Woodham); material: dict with ka, ks, shininess, ambient (and model)
 when the coefficients are known, else they are estimated.
 Returns normals (H, W, 3), albedo (H, W, 3), residual (H, W; -1 where no normal was found),
-the specular coefficients used or estimated, and a summary.)doc");
+the specular coefficients used or estimated, and a summary. With 1 or 2 images (material with
+kd required) the global solver with smoothness, integrability and boundary priors runs instead and
+the result has ambiguity_deg (H, W): the angle the data alone leaves open per pixel.)doc");
 
   m.def(
       "angular_error",

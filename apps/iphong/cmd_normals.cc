@@ -13,6 +13,7 @@
 #include "io/staging.h"
 #include "io/visualize.h"
 #include "iphong/commands.h"
+#include "solve/few_images.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
 
@@ -88,7 +89,35 @@ void RunNormals(const NormalsCommandOptions& o) {
   dataset.images.shrink_to_fit();
   const double load_seconds = Seconds(total_start);
 
-  const solve::NormalResult result = solve::EstimateNormals(data, options);
+  solve::NormalResult result;
+  ImageF ambiguity;
+  if (data.images < 3) {
+    // One or two images: the per-pixel problem is ambiguous; solve it globally with priors.
+    if (!dataset.material || !dataset.material->kd_known || o.ignore_material) {
+      throw std::runtime_error(o.dataset + "/material.json: with " + std::to_string(data.images) +
+                               " image(s) the coefficients must be known, kd (a uniform albedo) "
+                               "included");
+    }
+    solve::FewImageOptions few;
+    few.model = options.model;
+    few.material = dataset.material->material;
+    few.ambient_term = options.ambient_term;
+    few.threads = o.threads;
+    const solve::FewImageResult r = solve::EstimateNormalsFewImages(data, few);
+    result.model = options.model;
+    result.normals = r.normals;
+    result.residual = r.residual;
+    result.albedo = ImageF(data.width, data.height, 3);
+    for (int p : data.pixels)
+      for (int c = 0; c < 3; ++c)
+        result.albedo.pixels[3 * p + c] = static_cast<float>(few.material.kd[c]);
+    result.summary.solve_seconds = r.solve_seconds;
+    result.summary.iterations = r.iterations;
+    result.summary.message = r.message;
+    ambiguity = r.ambiguity_deg;
+  } else {
+    result = solve::EstimateNormals(data, options);
+  }
   if (tty) std::fprintf(stderr, "\r%30s\r", "");
 
   nlohmann::json metrics;
@@ -101,6 +130,9 @@ void RunNormals(const NormalsCommandOptions& o) {
   metrics["specular_seconds"] = result.summary.specular_seconds;
   metrics["solve_seconds"] = result.summary.solve_seconds;
   metrics["iterations"] = result.summary.iterations;
+  if (!ambiguity.pixels.empty()) {
+    metrics["solver"] = "global (one or two images): data + smoothness + integrability + boundary";
+  }
   metrics["dark_pixels"] = result.summary.dark_pixels;
   metrics["underdetermined_pixels"] = result.summary.underdetermined_pixels;
   metrics["material"] = options.material_known                         ? "known (material.json)"
@@ -121,6 +153,7 @@ void RunNormals(const NormalsCommandOptions& o) {
                  {16, io::Encoding::kLinear});
   io::WriteImage(out.file("albedo.exr"), result.albedo);
   io::WriteImage(out.file("residual.exr"), result.residual);
+  if (!ambiguity.pixels.empty()) io::WriteImage(out.file("ambiguity.exr"), ambiguity);
   if (result.material_estimated) {
     const nlohmann::json material = {
         {"model", reflectance::LobeName(options.model)},
@@ -137,11 +170,19 @@ void RunNormals(const NormalsCommandOptions& o) {
   io::WriteTextFile(out.file("metrics.json"), metrics.dump(2) + "\n");
   out.Commit();
 
-  std::printf(
-      "%zu pixels x %d images, model %s: load %.2f s, Woodham %.2f s, specular %.2f s, "
-      "per-pixel fit %.2f s\n",
-      data.pixel_count(), data.images, reflectance::LobeName(options.model).c_str(), load_seconds,
-      result.summary.init_seconds, result.summary.specular_seconds, result.summary.solve_seconds);
+  if (ambiguity.pixels.empty()) {
+    std::printf(
+        "%zu pixels x %d images, model %s: load %.2f s, Woodham %.2f s, specular %.2f s, "
+        "per-pixel fit %.2f s\n",
+        data.pixel_count(), data.images, reflectance::LobeName(options.model).c_str(), load_seconds,
+        result.summary.init_seconds, result.summary.specular_seconds, result.summary.solve_seconds);
+  } else {
+    std::printf(
+        "%zu pixels x %d images, model %s: load %.2f s, global solve with priors %.2f s "
+        "(%lld iterations)\n",
+        data.pixel_count(), data.images, reflectance::LobeName(options.model).c_str(), load_seconds,
+        result.summary.solve_seconds, result.summary.iterations);
+  }
   if (result.material_estimated) {
     std::printf(
         "Estimated ks = [%.3f %.3f %.3f], shininess = %.1f, ambient = [%.3f %.3f %.3f] (%s)\n",
@@ -163,9 +204,9 @@ void RunNormals(const NormalsCommandOptions& o) {
         errors->mean_deg, errors->median_deg, 100 * errors->below_5_deg, 100 * errors->below_10_deg,
         100 * errors->below_20_deg);
   }
-  std::printf("Wrote %s: normals.exr, normals.png, albedo.exr, residual.exr, metrics.json%s%s\n",
+  std::printf("Wrote %s: normals.exr, normals.png, albedo.exr, residual.exr, metrics.json%s%s%s\n",
               o.output_dir.c_str(), result.material_estimated ? ", material.json" : "",
-              errors ? ", error.png" : "");
+              errors ? ", error.png" : "", ambiguity.pixels.empty() ? "" : ", ambiguity.exr");
 }
 
 struct EvalOptions {

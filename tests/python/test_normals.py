@@ -42,7 +42,7 @@ def test_bad_arrays_raise_value_error():
         iphong.estimate_normals(images, lights[:3])
     with pytest.raises(ValueError, match=r"images must have shape \(K, H, W, 3\)"):
         iphong.estimate_normals(images[..., :2], lights)
-    with pytest.raises(ValueError, match="at least 3 images"):
+    with pytest.raises(ValueError, match="with 1 or 2 images pass material"):
         iphong.estimate_normals(images[:2], lights[:2])
     with pytest.raises(ValueError, match=r"mask must have shape"):
         iphong.estimate_normals(images, lights, mask=np.ones((4, 4), bool))
@@ -73,3 +73,17 @@ def test_real_ball_beats_woodham():
                                                            discard_bright=0)["normals"],
                                    d["normal_gt"], d["mask"])
     assert phong["mean_deg"] < 2.6 < 4.0 < woodham["mean_deg"]
+
+
+def test_two_images_use_the_global_solver_with_priors():
+    scene = {"width": 48, "height": 48,
+             "lights": [{"direction": [0.5, 0.3, 0.8]}, {"direction": [-0.4, -0.2, 0.9]}],
+             "objects": [{"shape": "sphere", "radius": 0.85, "subdivisions": 5,
+                          "material": {"kd": [0.6, 0.5, 0.4], "ks": 0}}], "model": "lambert"}
+    out = iphong.render(scene, per_light=True)
+    r = iphong.estimate_normals(out["images"], out["light_directions"], mask=out["mask"],
+                                model="lambert", material={"kd": [0.6, 0.5, 0.4]})
+    e = iphong.angular_error(r["normals"], out["normals"], out["mask"])
+    assert e["median_deg"] < 3
+    assert r["ambiguity_deg"].shape == (48, 48)
+    assert r["ambiguity_deg"][out["mask"]].max() > 10  # two cones: two solutions apart
