@@ -240,9 +240,11 @@ struct PixelFitter {
               double shininess)
       : data(d), options(o), ks(fit_ks), cost(MakeCost(d, o, fit_ks, shininess)), function(cost) {
     solver.options.max_num_iterations = o.max_iterations;
-    solver.options.parameter_tolerance = 1e-10;
-    solver.options.function_tolerance = 1e-10;
-    solver.options.gradient_tolerance = 1e-14;
+    // 1e-8 of the chart is ~1e-6 degrees: far below any useful precision, and it saves the
+    // iterations that only polish noise.
+    solver.options.parameter_tolerance = 1e-8;
+    solver.options.function_tolerance = 1e-8;
+    solver.options.gradient_tolerance = 1e-12;
     gray.resize(3 * d.images);
     usable.resize(d.images);
     order.reserve(d.images);
@@ -272,6 +274,8 @@ struct PixelFitter {
     if (!(s.residual > options.restart_residual * MeanObservation(p))) return;
     PixelSolution second = Woodham(data, p, darker, Eigen::Matrix3Xd(), order);
     if (second.status != PixelStatus::kSolved) return;
+    // A start already near the solution (within 2 degrees) would converge to the same place.
+    if (second.normal.dot(s.normal) > std::cos(2.0 * M_PI / 180)) return;
     second.iterations = 0;
     Fit(p, second);
     s.iterations += second.iterations;
@@ -321,7 +325,10 @@ struct PixelFitter {
       Eigen::Vector2d x = Eigen::Vector2d::Zero();
       const auto summary = solver.Solve(function, &x);
       s.iterations += summary.iterations;
+      const Vec3d previous = normal;
       normal = cost.Normal(x.data());
+      // Reweighting can no longer move a normal that moved less than 0.01 degrees.
+      if (round > 0 && previous.dot(normal) > std::cos(1e-2 * M_PI / 180)) break;
       // Cauchy weights from the unweighted residuals of the usable observations, at the new
       // normal (x = 0 once the chart is re-centred there).
       cost.n0 = normal;
