@@ -55,7 +55,8 @@ double ErrorScale(const solve::AngularErrorMetrics& m) {
 void RunNormals(const NormalsCommandOptions& o) {
   const auto total_start = Clock::now();
   const bool tty = ::isatty(2);
-  io::Dataset dataset = io::LoadDataset(o.dataset);
+  io::ObservationSet loaded = io::LoadObservations(o.dataset);
+  io::Dataset& dataset = loaded.dataset;
   for (const std::string& warning : dataset.warnings) {
     std::fprintf(stderr, "iphong: warning: %s\n", warning.c_str());
   }
@@ -80,13 +81,7 @@ void RunNormals(const NormalsCommandOptions& o) {
     };
   }
 
-  std::vector<const float*> images;
-  for (const ImageF& image : dataset.images) images.push_back(image.pixels.data());
-  solve::PhotometricData data =
-      solve::GatherObservations(images, dataset.width(), dataset.height(), dataset.mask,
-                                dataset.light_directions, dataset.light_intensities);
-  dataset.images.clear();  // keep only the masked observations
-  dataset.images.shrink_to_fit();
+  const solve::PhotometricData& data = loaded.observations;  // masked pixels only
   const double load_seconds = Seconds(total_start);
 
   solve::NormalResult result;

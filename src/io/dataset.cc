@@ -160,6 +160,16 @@ nlohmann::json MaterialJson(const render::Scene& scene, const render::RenderOpti
   return j;
 }
 
+// Datasets that say their integer images are sRGB-encoded (render.json) are linearized.
+bool DatasetIsSrgb(const fs::path& dir) {
+  if (!fs::exists(dir / "render.json")) return false;
+  std::ifstream file(dir / "render.json");
+  std::ostringstream text;
+  text << file.rdbuf();
+  const nlohmann::json meta = JsonReader::Parse(text.str(), (dir / "render.json").string());
+  return meta.value("encoding", "linear") == "srgb";
+}
+
 }  // namespace
 
 void WriteNormalMat(const std::string& path, const std::string& variable, const ImageF& normals) {
@@ -266,16 +276,9 @@ Dataset LoadDataset(const std::string& directory, const DatasetLoadOptions& opti
     });
     for (const std::string& error : errors)
       if (!error.empty()) throw std::runtime_error(error);
-    // Datasets that say their integer images are sRGB-encoded (render.json) are linearized.
-    if (fs::exists(dir / "render.json")) {
-      std::ifstream file(dir / "render.json");
-      std::ostringstream text;
-      text << file.rdbuf();
-      const nlohmann::json meta = JsonReader::Parse(text.str(), (dir / "render.json").string());
-      if (meta.value("encoding", "linear") == "srgb") {
-        for (ImageF& image : d.images)
-          for (float& v : image.pixels) v = SrgbToLinear(v);
-      }
+    if (DatasetIsSrgb(dir)) {
+      for (ImageF& image : d.images)
+        for (float& v : image.pixels) v = SrgbToLinear(v);
     }
     for (std::size_t i = 1; i < k; ++i) {
       if (d.images[i].width != d.images[0].width || d.images[i].height != d.images[0].height) {
@@ -384,6 +387,68 @@ void WriteRenderOutput(const std::string& directory, const render::Scene& scene,
     WriteText(temp / "render.json", meta.dump(2) + "\n");
   }
   staging.Commit();
+}
+
+}  // namespace iphong::io
+
+namespace iphong::io {
+
+ObservationSet LoadObservations(const std::string& directory, const DatasetLoadOptions& options) {
+  const fs::path dir(directory);
+  DatasetLoadOptions meta_options = options;
+  meta_options.load_images = false;
+  ObservationSet set;
+  Dataset& d = set.dataset;
+  d = LoadDataset(directory, meta_options);
+  const std::size_t k = d.filenames.size();
+  if (d.mask.width == 0) {  // no mask.png: the whole image, sized by the first image
+    const ImageF first = ReadImage((dir / d.filenames[0]).string());
+    d.mask = Mask(first.width, first.height, true);
+  }
+  const int w = d.mask.width, h = d.mask.height;
+  solve::PhotometricData& data = set.observations;
+  data.width = w;
+  data.height = h;
+  data.images = static_cast<int>(k);
+  data.light_directions = d.light_directions;
+  data.light_intensities = d.light_intensities;
+  for (int p = 0; p < w * h; ++p)
+    if (d.mask.inside[p]) data.pixels.push_back(p);
+  data.values.assign(data.pixels.size() * k * 3, 0.0f);
+  const bool srgb = DatasetIsSrgb(dir);
+  std::vector<std::string> errors(k);
+  ParallelFor(0, k, 1, options.threads, [&](std::size_t b, std::size_t e) {
+    for (std::size_t j = b; j < e; ++j) {
+      try {
+        const std::string path = (dir / d.filenames[j]).string();
+        const ImageF image = ToRgb(ReadImage(path));
+        if (image.width != w || image.height != h) {
+          errors[j] = path + ": is " + std::to_string(image.width) + "x" +
+                      std::to_string(image.height) + ", but the mask is " + std::to_string(w) +
+                      "x" + std::to_string(h);
+          continue;
+        }
+        for (std::size_t i = 0; i < data.pixels.size(); ++i) {
+          const float* src = image.pixels.data() + 3 * static_cast<std::size_t>(data.pixels[i]);
+          float* dst = data.values.data() + (i * k + j) * 3;
+          for (int c = 0; c < 3; ++c) {
+            if (!std::isfinite(src[c])) {
+              errors[j] = path + ": has a non-finite value";
+              break;
+            }
+            dst[c] = srgb ? SrgbToLinear(src[c]) : src[c];
+          }
+          if (!errors[j].empty()) break;
+        }
+      } catch (const std::exception& ex) {
+        errors[j] = ex.what();
+      }
+    }
+  });
+  for (const std::string& error : errors)
+    if (!error.empty()) throw std::runtime_error(error);
+  if (auto m = data.Validate(); !m.empty()) throw std::runtime_error(directory + ": " + m);
+  return set;
 }
 
 }  // namespace iphong::io

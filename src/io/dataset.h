@@ -15,6 +15,7 @@
 #include "io/scene_file.h"
 #include "reflectance/material.h"
 #include "render/renderer.h"
+#include "solve/photometric_data.h"
 
 namespace iphong::io {
 
@@ -51,6 +52,16 @@ struct DatasetLoadOptions {
 // (and the line for text files): missing or short light files, NaN, zero intensities, image
 // count or size mismatches, unreadable images, bad JSON.
 Dataset LoadDataset(const std::string& directory, const DatasetLoadOptions& options = {});
+
+// The dataset without its images, plus the masked pixels of every image gathered as the images
+// are decoded (in parallel, one image per thread at a time): memory is K × masked pixels × 3
+// floats instead of K full images. Same errors as LoadDataset.
+struct ObservationSet {
+  Dataset dataset;  // images left empty
+  solve::PhotometricData observations;
+};
+ObservationSet LoadObservations(const std::string& directory,
+                                const DatasetLoadOptions& options = {});
 
 // Writes what `iphong render` produces into `directory`, atomically (the folder appears complete
 // or not at all; an existing one is replaced). With per_light, a DiLiGenT dataset (one image per

@@ -379,3 +379,29 @@ TEST(Noise, ShotNoiseVarianceFollowsTheSignal) {
 
 }  // namespace
 }  // namespace iphong::io
+
+namespace iphong::io {
+namespace {
+
+TEST_F(BadDataset, StreamingObservationsEqualLoadThenGather) {
+  const Dataset d = LoadDataset(Path("d"));
+  std::vector<const float*> images;
+  for (const ImageF& image : d.images) images.push_back(image.pixels.data());
+  const solve::PhotometricData gathered = solve::GatherObservations(
+      images, d.width(), d.height(), d.mask, d.light_directions, d.light_intensities);
+  const ObservationSet streamed = LoadObservations(Path("d"));
+  EXPECT_EQ(streamed.observations.pixels, gathered.pixels);
+  EXPECT_EQ(streamed.observations.values, gathered.values);
+  EXPECT_TRUE(streamed.dataset.images.empty());
+  EXPECT_EQ(streamed.dataset.normal_gt.pixels, d.normal_gt.pixels);
+  // The same one-line errors as the full loader.
+  Write("d/002.png", "\x89PNG\r\n\x1a\n garbage");
+  EXPECT_NE(ErrorOf([&] { LoadObservations(Path("d")); }).find("002.png"), std::string::npos);
+  ImageF small(8, 8, 3, 0.5f);
+  WriteImage(Path("d/002.png"), small, {16, Encoding::kLinear});
+  EXPECT_EQ(ErrorOf([&] { LoadObservations(Path("d")); }),
+            Path("d/002.png") + ": is 8x8, but the mask is 32x24");
+}
+
+}  // namespace
+}  // namespace iphong::io
