@@ -44,33 +44,54 @@ struct Lighting {
   bool HasPointLights() const;
 };
 
-// The full model at one surface point: ambient plus every light. `position_cam` is only read for
-// point lights. Vectors are unit, camera frame.
+// Light `light` as seen from a surface point: the unit direction toward it and its intensities
+// there (divided by d² for a point light with falloff). False where no direction is defined (the
+// point sits on a point light).
+template <typename T>
+bool LightAt(const Light& light, const Vec3T<T>& position_cam, Vec3T<T>* light_dir_cam,
+             Vec3T<T>* diffuse, Vec3T<T>* specular) {
+  using std::sqrt;
+  *diffuse = light.diffuse_intensity.template cast<T>();
+  *specular = light.specular_intensity.template cast<T>();
+  if (light.type == LightType::kDirectional) {
+    *light_dir_cam = light.direction_cam.template cast<T>();
+    return true;
+  }
+  const Vec3T<T> to_light = light.position_cam.template cast<T>() - position_cam;
+  const T distance2 = to_light.squaredNorm();
+  if (!(distance2 > T(0))) return false;
+  *light_dir_cam = to_light / sqrt(distance2);
+  if (light.inverse_square_falloff) {
+    *diffuse /= distance2;
+    *specular /= distance2;
+  }
+  return true;
+}
+
+// The full model at one surface point: ambient plus every light j for which
+// visible(j, light_dir_cam) holds (the renderer's cast shadows and single-light images).
+// `position_cam` is only read for point lights. Vectors are unit, camera frame.
+template <typename T, typename Visible>
+Vec3T<T> ShadeVisible(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam,
+                      const Vec3T<T>& position_cam, const MaterialT<T>& material,
+                      const Lighting& lighting, const ModelOptions& options, Visible visible) {
+  Vec3T<T> color = AmbientTerm(Vec3T<T>(lighting.ambient.template cast<T>()), material);
+  for (std::size_t j = 0; j < lighting.lights.size(); ++j) {
+    Vec3T<T> light_dir_cam, diffuse, specular;
+    if (!LightAt(lighting.lights[j], position_cam, &light_dir_cam, &diffuse, &specular)) continue;
+    if (!visible(j, light_dir_cam)) continue;
+    color += LightTerm(normal_cam, view_cam, light_dir_cam, diffuse, specular, material, options);
+  }
+  return color;
+}
+
+// The full model at one surface point: ambient plus every light.
 template <typename T>
 Vec3T<T> Shade(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam, const Vec3T<T>& position_cam,
                const MaterialT<T>& material, const Lighting& lighting,
                const ModelOptions& options) {
-  using std::sqrt;
-  Vec3T<T> color = AmbientTerm(Vec3T<T>(lighting.ambient.template cast<T>()), material);
-  for (const Light& light : lighting.lights) {
-    Vec3T<T> diffuse = light.diffuse_intensity.template cast<T>();
-    Vec3T<T> specular = light.specular_intensity.template cast<T>();
-    Vec3T<T> light_dir_cam;
-    if (light.type == LightType::kDirectional) {
-      light_dir_cam = light.direction_cam.template cast<T>();
-    } else {
-      const Vec3T<T> to_light = light.position_cam.template cast<T>() - position_cam;
-      const T distance2 = to_light.squaredNorm();
-      if (!(distance2 > T(0))) continue;  // the point sits on the light: no defined direction
-      light_dir_cam = to_light / sqrt(distance2);
-      if (light.inverse_square_falloff) {
-        diffuse /= distance2;
-        specular /= distance2;
-      }
-    }
-    color += LightTerm(normal_cam, view_cam, light_dir_cam, diffuse, specular, material, options);
-  }
-  return color;
+  return ShadeVisible(normal_cam, view_cam, position_cam, material, lighting, options,
+                      [](std::size_t, const Vec3T<T>&) { return true; });
 }
 
 }  // namespace iphong::reflectance

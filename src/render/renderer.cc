@@ -116,25 +116,6 @@ class ShadowMap {
   bool perspective_ = false;
 };
 
-// Light j's direction and intensities at a point (falloff applied); false where undefined.
-bool LightAt(const Light& light, const Vec3d& point, Vec3d* dir, Vec3d* diffuse, Vec3d* specular) {
-  *diffuse = light.diffuse_intensity;
-  *specular = light.specular_intensity;
-  if (light.type == LightType::kDirectional) {
-    *dir = light.direction_cam;
-    return true;
-  }
-  const Vec3d to_light = light.position_cam - point;
-  const double d2 = to_light.squaredNorm();
-  if (!(d2 > 0)) return false;
-  *dir = to_light / std::sqrt(d2);
-  if (light.inverse_square_falloff) {
-    *diffuse /= d2;
-    *specular /= d2;
-  }
-  return true;
-}
-
 // Evaluates ambient + the selected lights (all, or only `only_light`) at one surface point. The
 // per-pixel path runs the shared model in float (the image is float; it halves the cost of pow);
 // vertex colours use double.
@@ -156,21 +137,15 @@ struct PointShader {
   Vec3T<T> Shade(reflectance::MaterialT<T> material, const Vec3d& normal, const Vec3d& position,
                  const Vec3d& albedo, int only_light) const {
     material.kd = albedo.cast<T>();
-    const Vec3T<T> n = normal.cast<T>();
     const Vec3T<T> view = camera.ViewDirection(position).cast<T>();
-    Vec3T<T> color = reflectance::AmbientTerm<T>(scene.lighting.ambient.cast<T>(), material);
-    const auto& lights = scene.lighting.lights;
-    for (std::size_t j = 0; j < lights.size(); ++j) {
-      if (only_light >= 0 && static_cast<int>(j) != only_light) continue;
-      Vec3d dir, diffuse, specular;
-      if (!LightAt(lights[j], position, &dir, &diffuse, &specular)) continue;
-      const double n_dot_l = normal.dot(dir);
-      if (!(n_dot_l > 0)) continue;
-      if (shadows[j] && !shadows[j]->Lit(position, n_dot_l)) continue;
-      color += reflectance::LightTerm<T>(n, view, dir.cast<T>(), diffuse.cast<T>(),
-                                         specular.cast<T>(), material, options.model);
-    }
-    return color;
+    return reflectance::ShadeVisible<T>(
+        normal.cast<T>(), view, position.cast<T>(), material, scene.lighting, options.model,
+        [&](std::size_t j, const Vec3T<T>& light_dir) {
+          if (only_light >= 0 && static_cast<int>(j) != only_light) return false;
+          if (!shadows[j]) return true;
+          const double n_dot_l = normal.dot(light_dir.template cast<double>());
+          return n_dot_l <= 0 || shadows[j]->Lit(position, n_dot_l);  // unlit: no term anyway
+        });
   }
   Vec3d operator()(const SceneObject& object, const Vec3d& normal, const Vec3d& position,
                    const Vec3d& albedo, int only_light) const {
