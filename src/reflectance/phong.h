@@ -146,6 +146,28 @@ T SpecularLobe(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam, const Vec3T
   return LobePower(cosine, lambda, shininess, options);
 }
 
+// One light's two shading factors at a point, with seed 003's rules applied: diffuse = N·L where
+// positive (else 0) and specular = the lobe (0 unless N·L > 0). A light contributes
+// Id ⊙ kd · diffuse + Is ⊙ ks · specular; the albedo enters linearly, which is what lets the
+// photometric-stereo solvers eliminate it in closed form.
+template <typename T>
+struct LightFactors {
+  T diffuse = T(0);
+  T specular = T(0);
+};
+
+template <typename T>
+LightFactors<T> ShadingFactors(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam,
+                               const Vec3T<T>& light_dir_cam, const T& shininess,
+                               const ModelOptions& options) {
+  LightFactors<T> f;
+  const T n_dot_l = normal_cam.dot(light_dir_cam);
+  if (!(n_dot_l > T(0))) return f;
+  f.diffuse = n_dot_l;
+  f.specular = SpecularLobe(normal_cam, view_cam, light_dir_cam, shininess, options);
+  return f;
+}
+
 // One light's contribution Id ⊙ kd (N·L) + Is ⊙ ks · lobe, without the ambient term. This is the
 // residual model of photometric stereo: image j is Ia ⊙ ka + LightTerm(L_j, E_j, E_j).
 template <typename T>
@@ -153,14 +175,10 @@ Vec3T<T> LightTerm(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam,
                    const Vec3T<T>& light_dir_cam, const Vec3T<T>& diffuse_intensity,
                    const Vec3T<T>& specular_intensity, const MaterialT<T>& material,
                    const ModelOptions& options) {
-  const T n_dot_l = normal_cam.dot(light_dir_cam);
-  if (!(n_dot_l > T(0))) return Vec3T<T>::Zero();
-  Vec3T<T> result = diffuse_intensity.cwiseProduct(material.kd) * n_dot_l;
-  if (options.lobe != Lobe::kLambert) {
-    const T lobe = SpecularLobe(normal_cam, view_cam, light_dir_cam, material.shininess, options);
-    result += specular_intensity.cwiseProduct(material.ks) * lobe;
-  }
-  return result;
+  const LightFactors<T> f =
+      ShadingFactors(normal_cam, view_cam, light_dir_cam, material.shininess, options);
+  return diffuse_intensity.cwiseProduct(material.kd) * f.diffuse +
+         specular_intensity.cwiseProduct(material.ks) * f.specular;
 }
 
 // The ambient term Ia ⊙ ka.

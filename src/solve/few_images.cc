@@ -9,13 +9,12 @@
 
 #include "core/parallel.h"
 #include "reflectance/phong.h"
+#include "solve/internal.h"
 
 namespace iphong::solve {
 namespace {
 
-const Vec3d kView(0, 0, 1);
-
-double Luminance(const Vec3d& rgb) { return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]; }
+using internal::Luminance;
 
 // Image j's shading at one pixel through the shared model, against the observation.
 struct DataCost {
@@ -27,9 +26,10 @@ struct DataCost {
   bool operator()(const T* n, T* residual) const {
     const Vec3T<T> normal(n[0], n[1], n[2]);
     const Vec3T<T> predicted =
-        ambient.cast<T>() + reflectance::LightTerm<T>(
-                                normal, kView.cast<T>(), light_dir.cast<T>(), intensity.cast<T>(),
-                                intensity.cast<T>(), reflectance::CastMaterial<T>(material), model);
+        ambient.cast<T>() +
+        reflectance::LightTerm<T>(normal, internal::ViewCam().cast<T>(), light_dir.cast<T>(),
+                                  intensity.cast<T>(), intensity.cast<T>(),
+                                  reflectance::CastMaterial<T>(material), model);
     for (int c = 0; c < 3; ++c) residual[c] = predicted[c] - T(observed[c]);
     return true;
   }

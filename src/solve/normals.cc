@@ -15,19 +15,17 @@
 #include "core/parallel.h"
 #include "reflectance/phong.h"
 #include "reflectance/shade.h"
+#include "solve/internal.h"
 
 namespace iphong::solve {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 using Jet2 = ceres::Jet<double, 2>;
-const Vec3d kView(0, 0, 1);
 
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
-
-double Luminance(const Vec3d& rgb) { return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]; }
 
 // Two unit vectors completing n to an orthonormal basis.
 void Tangents(const Vec3d& n, Vec3d* t1, Vec3d* t2) {
@@ -65,7 +63,8 @@ PixelSolution Woodham(const PhotometricData& data, std::size_t p, const NormalOp
   double brightest = 0;
   for (int j = 0; j < k; ++j) {
     const Vec3d rgb(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]);
-    const double g = Luminance((rgb - o.ambient_term).cwiseQuotient(data.light_intensities[j]));
+    const double g =
+        internal::Luminance((rgb - o.ambient_term).cwiseQuotient(data.light_intensities[j]));
     order.emplace_back(g, j);
     brightest = std::max(brightest, g);
   }
@@ -121,24 +120,31 @@ PixelSolution Woodham(const PhotometricData& data, std::size_t p, const NormalOp
     den += Vec3d::Constant(nl * nl);
   }
   s.albedo = num.cwiseQuotient(den.cwiseMax(1e-12)).cwiseMax(0.0);
+  // The residual of the Lambertian model Woodham fits, through the shared model.
+  reflectance::Material lambertian;
+  lambertian.kd = s.albedo;
+  reflectance::ModelOptions lambert;
+  lambert.lobe = reflectance::Lobe::kLambert;
   for (int i = first; i < last; ++i) {
     const int j = order[i].second;
-    const double nl = std::max(0.0, s.normal.dot(data.light_directions[j]));
-    for (int c = 0; c < 3; ++c) {
-      const double pred = o.ambient_term[c] + data.light_intensities[j][c] * s.albedo[c] * nl;
-      sq += std::pow(obs[3 * j + c] - pred, 2);
-      ++used;
-    }
+    const Vec3d& e = data.light_intensities[j];
+    const Vec3d predicted =
+        o.ambient_term + reflectance::LightTerm<double>(s.normal, internal::ViewCam(),
+                                                        data.light_directions[j], e, e, lambertian,
+                                                        lambert);
+    sq += (Vec3d(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]) - predicted).squaredNorm();
+    used += 3;
   }
   s.residual = std::sqrt(sq / std::max(used, 1));
   return s;
 }
 
 // The per-pixel model with the albedo eliminated: residuals as a function of the normal only.
-// Observations are y = (I_j − Ia⊙ka)/E_j, which under the model equal kd·(N·L_j)⁺ + ks·lobe_j per
-// channel. With `channels` = 1 they are reduced to their luminance (exact under the model, since
-// luminance is linear; a third of the residuals); with 3 each channel keeps its own albedo, which
-// is more accurate on real photos whose colours depart from the model.
+// Observations are y = (I_j − Ia⊙ka)/E_j, which under the model equal kd·diffuse_j + ks·specular_j
+// per channel (reflectance::ShadingFactors). With `channels` = 1 they are reduced to their
+// luminance (exact under the model, since luminance is linear; a third of the residuals); with 3
+// each channel keeps its own albedo, which is more accurate on real photos whose colours depart
+// from the model.
 struct PixelCost {
   const PhotometricData* data = nullptr;
   int channels = 3;
@@ -148,19 +154,10 @@ struct PixelCost {
   Vec3d ks = Vec3d::Zero();        // per channel (luminance in [0] when channels = 1)
   double shininess = 1;
   reflectance::ModelOptions model;
-  mutable std::vector<double> scratch_d;  // N·L and lobe per light, reused between calls
-  mutable std::vector<Jet2> scratch_j;
+  mutable std::vector<reflectance::LightFactors<double>> factors_d;  // reused between calls
+  mutable std::vector<reflectance::LightFactors<Jet2>> factors_j;
 
   int NumResiduals() const { return data->images * channels; }
-
-  template <typename T>
-  std::vector<T>& Scratch() const {
-    if constexpr (std::is_same_v<T, double>) {
-      return scratch_d;
-    } else {
-      return scratch_j;
-    }
-  }
 
   template <typename T>
   Vec3T<T> Normal(const T* x) const {
@@ -168,54 +165,35 @@ struct PixelCost {
     return n / n.norm();
   }
 
-  // Per light: (N·L)⁺ and the specular lobe, into the scratch buffer.
+  // Every light's factors at this normal, into the reused buffer of the scalar type.
   template <typename T>
-  std::vector<T>& Shading(const Vec3T<T>& normal) const {
-    const int k = data->images;
-    std::vector<T>& s = Scratch<T>();
-    s.resize(2 * k);
-    const Vec3T<T> view = kView.cast<T>();
-    const T n_shine = T(shininess);
-    const bool specular = ks.maxCoeff() > 0;
-    for (int j = 0; j < k; ++j) {
-      const Vec3T<T> l = data->light_directions[j].cast<T>();
-      const T nl = normal.dot(l);
-      if (nl > T(0)) {
-        s[2 * j] = nl;
-        s[2 * j + 1] =
-            specular ? reflectance::SpecularLobe<T>(normal, view, l, n_shine, model) : T(0);
-      } else {
-        s[2 * j] = T(0);
-        s[2 * j + 1] = T(0);
-      }
+  const std::vector<reflectance::LightFactors<T>>& Factors(const Vec3T<T>& normal) const {
+    std::vector<reflectance::LightFactors<T>>* f;
+    if constexpr (std::is_same_v<T, double>) {
+      f = &factors_d;
+    } else {
+      f = &factors_j;
     }
-    return s;
-  }
-
-  // The albedo per channel that minimizes the weighted residuals for this shading.
-  template <typename T>
-  T Albedo(const std::vector<T>& s, int c) const {
-    const int k = data->images;
-    T num = T(0), den = T(0);
-    for (int j = 0; j < k; ++j) {
-      if (weight[j] == 0) continue;
-      num += T(weight[j]) * s[2 * j] * (T(y[j * channels + c]) - T(ks[c]) * s[2 * j + 1]);
-      den += T(weight[j]) * s[2 * j] * s[2 * j];
+    f->resize(data->images);
+    const Vec3T<T> view = internal::ViewCam().cast<T>();
+    for (int j = 0; j < data->images; ++j) {
+      (*f)[j] = reflectance::ShadingFactors<T>(normal, view, data->light_directions[j].cast<T>(),
+                                               T(shininess), model);
     }
-    T kd = den > T(1e-12) ? num / den : T(0);
-    return kd < T(0) ? T(0) : kd;
+    return *f;
   }
 
   template <typename T>
   bool operator()(const T* x, T* residuals) const {
     const int k = data->images;
-    const std::vector<T>& s = Shading<T>(Normal(x));
+    const auto& f = Factors<T>(Normal(x));
     for (int c = 0; c < channels; ++c) {
-      const T kd = Albedo(s, c);
+      const auto y_c = [&](std::size_t j) { return T(y[j * channels + c]); };
+      const T kd =
+          internal::EliminatedAlbedo<T>(f, T(ks[c]), y_c, [&](std::size_t j) { return weight[j]; });
       for (int j = 0; j < k; ++j) {
         residuals[j * channels + c] =
-            T(std::sqrt(weight[j])) *
-            (T(y[j * channels + c]) - kd * s[2 * j] - T(ks[c]) * s[2 * j + 1]);
+            T(std::sqrt(weight[j])) * (y_c(j) - kd * f[j].diffuse - T(ks[c]) * f[j].specular);
       }
     }
     return true;
@@ -232,7 +210,7 @@ struct PixelFitter {
   PixelCost cost;
   PixelFunction function;
   ceres::TinySolver<PixelFunction> solver;
-  std::vector<double> gray, usable, weights, residuals;
+  std::vector<double> y_rgb, y_lum, usable, weights, residuals;
   std::vector<std::pair<double, int>> order;
   NormalOptions darker;  // Woodham on the darker observations: the second start
 
@@ -245,7 +223,8 @@ struct PixelFitter {
     solver.options.parameter_tolerance = 1e-8;
     solver.options.function_tolerance = 1e-8;
     solver.options.gradient_tolerance = 1e-12;
-    gray.resize(3 * d.images);
+    y_rgb.resize(3 * d.images);
+    y_lum.resize(d.images);
     usable.resize(d.images);
     order.reserve(d.images);
     darker = o;
@@ -260,9 +239,10 @@ struct PixelFitter {
     PixelCost c;
     c.data = &d;
     c.channels = o.color_residuals ? 3 : 1;
-    c.ks = o.color_residuals ? ks : Vec3d(Luminance(ks), 0, 0);
+    c.ks = o.color_residuals ? ks : Vec3d(internal::Luminance(ks), 0, 0);
     c.shininess = shininess;
-    c.model.lobe = o.model;
+    // No specular coefficient means no specular term: the Lambertian model, not a zero lobe.
+    c.model.lobe = ks.isZero() ? reflectance::Lobe::kLambert : o.model;
     return c;
   }
 
@@ -303,19 +283,16 @@ struct PixelFitter {
       const bool saturated = rgb.maxCoeff() >= options.saturation;
       usable[j] = saturated ? 0.0 : 1.0;
       const Vec3d y = (rgb - options.ambient_term).cwiseQuotient(data.light_intensities[j]);
-      if (cost.channels == 1) {
-        gray[j] = Luminance(y);
-      } else {
-        for (int c = 0; c < 3; ++c) gray[3 * j + c] = y[c];
-      }
+      for (int c = 0; c < 3; ++c) y_rgb[3 * j + c] = y[c];
+      y_lum[j] = internal::Luminance(y);
       if (!saturated) {
-        mean += std::abs(Luminance(y));
+        mean += std::abs(y_lum[j]);
         ++count;
       }
     }
     if (count < 3) return;  // keep Woodham's answer
     const double scale = options.robust_scale * std::max(mean / count, 1e-6);
-    cost.y = gray.data();
+    cost.y = cost.channels == 1 ? y_lum.data() : y_rgb.data();
     weights = usable;
     Vec3d normal = s.normal;
     for (int round = 0; round < options.irls_rounds; ++round) {
@@ -355,78 +332,77 @@ struct PixelFitter {
     for (int i = 0; i < k * cost.channels; ++i) {
       s.robust_cost += std::log1p(std::pow(residuals[i] / scale, 2));
     }
-    RgbAlbedoAndResidual(obs, normal, s);
+    AlbedoAndResidual(obs, normal, s);
   }
 
-  // Closed-form RGB albedo with the final weights; RMS residual over usable observations.
-  void RgbAlbedoAndResidual(const float* obs, const Vec3d& normal, PixelSolution& s) {
+  // The RGB albedo, eliminated as in the fit with its final weights, and the RMS difference
+  // between the observations and the shared model (LightTerm) over the usable ones.
+  void AlbedoAndResidual(const float* obs, const Vec3d& normal, PixelSolution& s) {
     const int k = data.images;
-    const std::vector<double>& shading = cost.Shading<double>(normal);
-    Vec3d num = Vec3d::Zero(), den = Vec3d::Zero();
-    for (int j = 0; j < k; ++j) {
-      const double w = weights[j];
-      if (w == 0) continue;
-      for (int c = 0; c < 3; ++c) {
-        const double e = data.light_intensities[j][c];
-        num[c] += w * e * shading[2 * j] *
-                  (obs[3 * j + c] - options.ambient_term[c] - e * ks[c] * shading[2 * j + 1]);
-        den[c] += w * e * e * shading[2 * j] * shading[2 * j];
-      }
+    const auto& f = cost.Factors<double>(normal);
+    for (int c = 0; c < 3; ++c) {
+      s.albedo[c] = internal::EliminatedAlbedo<double>(
+          f, ks[c], [&](std::size_t j) { return y_rgb[3 * j + c]; },
+          [&](std::size_t j) { return weights[j]; });
     }
-    s.albedo = num.cwiseQuotient(den.cwiseMax(1e-12)).cwiseMax(0.0);
+    reflectance::Material material;
+    material.kd = s.albedo;
+    material.ks = ks;
+    material.shininess = cost.shininess;
     double sq = 0;
     int used = 0;
     for (int j = 0; j < k; ++j) {
       if (usable[j] == 0) continue;
-      for (int c = 0; c < 3; ++c) {
-        const double e = data.light_intensities[j][c];
-        const double pred = options.ambient_term[c] +
-                            e * (s.albedo[c] * shading[2 * j] + ks[c] * shading[2 * j + 1]);
-        sq += std::pow(obs[3 * j + c] - pred, 2);
-        ++used;
-      }
+      const Vec3d& e = data.light_intensities[j];
+      const Vec3d predicted =
+          options.ambient_term + reflectance::LightTerm<double>(normal, internal::ViewCam(),
+                                                                data.light_directions[j], e, e,
+                                                                material, cost.model);
+      sq += (Vec3d(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]) - predicted).squaredNorm();
+      used += 3;
     }
     s.residual = std::sqrt(sq / std::max(used, 1));
   }
 };
 
 // Global fit of ks (RGB), log-shininess and the ambient term Ia⊙ka (RGB) over sampled pixels,
-// normals fixed, albedo eliminated.
+// normals fixed, albedo eliminated as in the per-pixel fit.
 struct SpecularCost {
+  using Jet7 = ceres::Jet<double, 7>;  // ks (3) + log-shininess (1) + ambient (3)
   const PhotometricData* data;
   std::size_t p;
   Vec3d normal;
   reflectance::ModelOptions model;
-  std::vector<double> weight;
+  std::vector<double> weight;                                        // K, 0 for saturated images
+  mutable std::vector<reflectance::LightFactors<double>> factors_d;  // reused between calls
+  mutable std::vector<reflectance::LightFactors<Jet7>> factors_j;
 
   template <typename T>
   bool operator()(const T* ks, const T* log_n, const T* ambient, T* residuals) const {
-    const int k = data->images;
-    const float* obs = data->pixel(p);
-    const T shininess = exp(log_n[0]);
-    const Vec3T<T> n = normal.cast<T>(), view = kView.cast<T>();
-    std::vector<T> nl(k), lobe(k);
-    Vec3T<T> num = Vec3T<T>::Zero(), den = Vec3T<T>::Zero();
-    for (int j = 0; j < k; ++j) {
-      const Vec3T<T> l = data->light_directions[j].cast<T>();
-      const double d = normal.dot(data->light_directions[j]);
-      nl[j] = T(std::max(0.0, d));
-      lobe[j] = d > 0 ? reflectance::SpecularLobe<T>(n, view, l, shininess, model) : T(0);
-      for (int c = 0; c < 3; ++c) {
-        const double w = weight[3 * j + c];
-        const double e = data->light_intensities[j][c];
-        num[c] += T(w * e) * nl[j] * (T(obs[3 * j + c]) - ambient[c] - T(e) * ks[c] * lobe[j]);
-        den[c] += T(w * e * e) * nl[j] * nl[j];
-      }
+    std::vector<reflectance::LightFactors<T>>* f;
+    if constexpr (std::is_same_v<T, double>) {
+      f = &factors_d;
+    } else {
+      f = &factors_j;
     }
+    const int k = data->images;
+    f->resize(k);
+    const T shininess = exp(log_n[0]);
+    const Vec3T<T> n = normal.cast<T>(), view = internal::ViewCam().cast<T>();
+    for (int j = 0; j < k; ++j) {
+      (*f)[j] = reflectance::ShadingFactors<T>(n, view, data->light_directions[j].cast<T>(),
+                                               shininess, model);
+    }
+    const float* obs = data->pixel(p);
     for (int c = 0; c < 3; ++c) {
-      T kd = den[c] > T(1e-12) ? num[c] / den[c] : T(0);
-      if (kd < T(0)) kd = T(0);
+      const auto y = [&](std::size_t j) {
+        return (T(obs[3 * j + c]) - ambient[c]) / T(data->light_intensities[j][c]);
+      };
+      const T kd =
+          internal::EliminatedAlbedo<T>(*f, ks[c], y, [&](std::size_t j) { return weight[j]; });
       for (int j = 0; j < k; ++j) {
-        const double e = data->light_intensities[j][c];
         residuals[3 * j + c] =
-            T(std::sqrt(weight[3 * j + c])) *
-            (T(obs[3 * j + c]) - ambient[c] - T(e) * (kd * nl[j] + ks[c] * lobe[j]));
+            T(std::sqrt(weight[j])) * (y(j) - kd * (*f)[j].diffuse - ks[c] * (*f)[j].specular);
       }
     }
     return true;
@@ -453,17 +429,16 @@ SpecularFit FitSpecular(const PhotometricData& data, const std::vector<std::size
   std::vector<SpecularCost*> costs;
   for (std::size_t p : sample) {
     if (solutions[p].status != PixelStatus::kSolved) continue;
-    auto* cost = new SpecularCost{&data, p, solutions[p].normal, {}, {}};
+    auto* cost = new SpecularCost{&data, p, solutions[p].normal, {}, {}, {}, {}};
     cost->model.lobe = o.model;
-    cost->weight.assign(3 * data.images, 1.0);
+    cost->weight.resize(data.images);
     const float* obs = data.pixel(p);
-    double mean = 0;
-    for (int i = 0; i < 3 * data.images; ++i) {
-      if (obs[i] >= o.saturation)
-        cost->weight[i / 3 * 3] = cost->weight[i / 3 * 3 + 1] = cost->weight[i / 3 * 3 + 2] = 0;
-      mean += obs[i];
+    double mean = 0;  // of y = I / E, the scale of the residuals
+    for (int j = 0; j < data.images; ++j) {
+      const Vec3d rgb(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]);
+      cost->weight[j] = rgb.maxCoeff() >= o.saturation ? 0.0 : 1.0;
+      mean += internal::Luminance(rgb.cwiseQuotient(data.light_intensities[j])) / data.images;
     }
-    mean /= 3 * data.images;
     costs.push_back(cost);
     auto* function = new ceres::AutoDiffCostFunction<SpecularCost, ceres::DYNAMIC, 3, 1, 3>(
         cost, 3 * data.images, ceres::DO_NOT_TAKE_OWNERSHIP);
