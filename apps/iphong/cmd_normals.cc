@@ -11,6 +11,7 @@
 #include "io/dataset.h"
 #include "io/image_io.h"
 #include "io/staging.h"
+#include "io/text_file.h"
 #include "io/visualize.h"
 #include "iphong/commands.h"
 #include "solve/few_images.h"

@@ -12,6 +12,7 @@
 #include "core/parallel.h"
 #include "io/json_reader.h"
 #include "io/staging.h"
+#include "io/text_file.h"
 #include "io/visualize.h"
 
 namespace iphong::io {
@@ -93,11 +94,7 @@ ImageF ReadNormalText(const fs::path& path, int width, int height) {
 }
 
 DatasetMaterial ParseMaterialJson(const fs::path& path) {
-  std::ifstream file(path);
-  if (!file) Fail(path, "cannot open");
-  std::ostringstream text;
-  text << file.rdbuf();
-  const nlohmann::json document = JsonReader::Parse(text.str(), path.string());
+  const nlohmann::json document = JsonReader::Parse(ReadTextFile(path.string()), path.string());
   const JsonReader j(document, path.string());
   j.OnlyKeys({"model", "ambient", "ka", "kd", "ks", "shininess", "comment"});
   DatasetMaterial m;
@@ -107,18 +104,12 @@ DatasetMaterial ParseMaterialJson(const fs::path& path) {
     j.Field("model").Fail(e.what());
   }
   m.ambient = j.Rgb("ambient", Vec3d::Ones());
-  m.material.ka = j.Rgb("ka", Vec3d::Zero());
-  m.material.ks = j.Rgb("ks", Vec3d::Zero());
-  m.material.shininess = j.Number("shininess", 1.0);
   m.kd_known = j.Has("kd");
-  m.material.kd = j.Rgb("kd", Vec3d::Ones());
-  if (auto message = reflectance::ValidateMaterial(m.material); !message.empty()) j.Fail(message);
+  reflectance::Material unknown;  // ka, ks 0, shininess 1; kd only a placeholder when absent
+  unknown.kd = Vec3d::Ones();
+  m.material = ReadMaterialCoefficients(j, unknown);
   if ((m.ambient.array() < 0).any()) j.Field("ambient").Fail("must be >= 0");
   return m;
-}
-
-void WriteText(const fs::path& path, const std::string& text) {
-  WriteTextFile(path.string(), text);
 }
 
 std::string Triples(const std::vector<Vec3d>& values) {
@@ -163,39 +154,30 @@ nlohmann::json MaterialJson(const render::Scene& scene, const render::RenderOpti
 // Datasets that say their integer images are sRGB-encoded (render.json) are linearized.
 bool DatasetIsSrgb(const fs::path& dir) {
   if (!fs::exists(dir / "render.json")) return false;
-  std::ifstream file(dir / "render.json");
-  std::ostringstream text;
-  text << file.rdbuf();
-  const nlohmann::json meta = JsonReader::Parse(text.str(), (dir / "render.json").string());
-  return meta.value("encoding", "linear") == "srgb";
+  const std::string path = (dir / "render.json").string();
+  return JsonReader::Parse(ReadTextFile(path), path).value("encoding", "linear") == "srgb";
 }
 
 }  // namespace
 
 void WriteNormalMat(const std::string& path, const std::string& variable, const ImageF& normals) {
-  const fs::path target(path);
-  const fs::path temp = target.parent_path() / ("." + target.filename().string() + ".partial");
   const std::size_t h = normals.height, w = normals.width;
   std::vector<double> data(h * w * 3);
   for (std::size_t r = 0; r < h; ++r)
     for (std::size_t c = 0; c < w; ++c)
       for (std::size_t k = 0; k < 3; ++k)
         data[r + h * (c + w * k)] = normals.pixels[3 * (r * w + c) + k];  // MATLAB: column-major
-  mat_t* mat = Mat_CreateVer(temp.c_str(), nullptr, MAT_FT_MAT5);
-  if (mat == nullptr) Fail(target, "cannot create the MATLAB file");
-  std::size_t dims[3] = {h, w, 3};
-  matvar_t* var =
-      Mat_VarCreate(variable.c_str(), MAT_C_DOUBLE, MAT_T_DOUBLE, 3, dims, data.data(), 0);
-  const bool ok = var != nullptr && Mat_VarWrite(mat, var, MAT_COMPRESSION_ZLIB) == 0;
-  if (var) Mat_VarFree(var);
-  Mat_Close(mat);
-  std::error_code error;
-  if (!ok) {
-    fs::remove(temp, error);
-    Fail(target, "cannot write variable " + variable);
-  }
-  fs::rename(temp, target, error);
-  if (error) Fail(target, error.message());
+  WriteFileAtomically(path, [&](const std::string& temp) -> std::string {
+    mat_t* mat = Mat_CreateVer(temp.c_str(), nullptr, MAT_FT_MAT5);
+    if (mat == nullptr) return "cannot create the MATLAB file";
+    std::size_t dims[3] = {h, w, 3};
+    matvar_t* var =
+        Mat_VarCreate(variable.c_str(), MAT_C_DOUBLE, MAT_T_DOUBLE, 3, dims, data.data(), 0);
+    const bool ok = var != nullptr && Mat_VarWrite(mat, var, MAT_COMPRESSION_ZLIB) == 0;
+    if (var) Mat_VarFree(var);
+    Mat_Close(mat);
+    return ok ? "" : "cannot write variable " + variable;
+  });
 }
 
 ImageF ReadNormalMat(const std::string& path, const std::string& variable) {
@@ -336,7 +318,6 @@ void WriteRenderOutput(const std::string& directory, const render::Scene& scene,
     }
   }
   StagingDirectory staging(directory);
-  const fs::path temp = staging.file("");
   {
     const std::string ext = settings.extension();
     const WriteOptions image_options = settings.write_options();
@@ -347,25 +328,25 @@ void WriteRenderOutput(const std::string& directory, const render::Scene& scene,
       for (std::size_t j = 0; j < output.per_light.size(); ++j) {
         std::string number = std::to_string(j + 1);
         number.insert(0, digits - number.size(), '0');
-        WriteImage((temp / (number + ext)).string(), output.per_light[j], image_options);
+        WriteImage(staging.file(number + ext), output.per_light[j], image_options);
         names += number + ext + "\n";
         directions.push_back(scene.lighting.lights[j].direction_cam);
         intensities.push_back(scene.lighting.lights[j].diffuse_intensity);
       }
-      WriteText(temp / "filenames.txt", names);
-      WriteText(temp / "light_directions.txt", Triples(directions));
-      WriteText(temp / "light_intensities.txt", Triples(intensities));
+      WriteTextFile(staging.file("filenames.txt"), names);
+      WriteTextFile(staging.file("light_directions.txt"), Triples(directions));
+      WriteTextFile(staging.file("light_intensities.txt"), Triples(intensities));
     } else {
-      WriteImage((temp / ("image" + ext)).string(), output.image, image_options);
+      WriteImage(staging.file("image" + ext), output.image, image_options);
     }
-    WriteImage((temp / "mask.png").string(), MaskImage(output.mask), {8, Encoding::kLinear});
-    WriteImage((temp / "normals.exr").string(), output.normal_cam);
-    WriteImage((temp / "normals.png").string(), NormalMapPicture(output.normal_cam, output.mask),
+    WriteImage(staging.file("mask.png"), MaskImage(output.mask), {8, Encoding::kLinear});
+    WriteImage(staging.file("normals.exr"), output.normal_cam);
+    WriteImage(staging.file("normals.png"), NormalMapPicture(output.normal_cam, output.mask),
                {16, Encoding::kLinear});
-    WriteImage((temp / "depth.exr").string(), output.depth);
-    WriteImage((temp / "albedo.exr").string(), output.albedo);
-    WriteNormalMat((temp / "Normal_gt.mat").string(), "Normal_gt", output.normal_cam);
-    WriteText(temp / "material.json", MaterialJson(scene, options).dump(2) + "\n");
+    WriteImage(staging.file("depth.exr"), output.depth);
+    WriteImage(staging.file("albedo.exr"), output.albedo);
+    WriteNormalMat(staging.file("Normal_gt.mat"), "Normal_gt", output.normal_cam);
+    WriteTextFile(staging.file("material.json"), MaterialJson(scene, options).dump(2) + "\n");
     nlohmann::json meta;
     meta["generator"] = "iphong render";
     meta["images"] = per_light ? output.per_light.size() : 1;
@@ -384,7 +365,7 @@ void WriteRenderOutput(const std::string& directory, const render::Scene& scene,
                      {"shot_photons", options.noise.shot_photons},
                      {"quantization_bits", options.noise.quantization_bits},
                      {"seed", options.noise.seed}};
-    WriteText(temp / "render.json", meta.dump(2) + "\n");
+    WriteTextFile(staging.file("render.json"), meta.dump(2) + "\n");
   }
   staging.Commit();
 }
@@ -407,38 +388,25 @@ ObservationSet LoadObservations(const std::string& directory, const DatasetLoadO
   }
   const int w = d.mask.width, h = d.mask.height;
   solve::PhotometricData& data = set.observations;
-  data.width = w;
-  data.height = h;
-  data.images = static_cast<int>(k);
-  data.light_directions = d.light_directions;
-  data.light_intensities = d.light_intensities;
-  for (int p = 0; p < w * h; ++p)
-    if (d.mask.inside[p]) data.pixels.push_back(p);
-  data.values.assign(data.pixels.size() * k * 3, 0.0f);
+  data = solve::ObservationLayout(w, h, d.mask, d.light_directions, d.light_intensities);
   const bool srgb = DatasetIsSrgb(dir);
   std::vector<std::string> errors(k);
   ParallelFor(0, k, 1, options.threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t j = b; j < e; ++j) {
+      const std::string path = (dir / d.filenames[j]).string();
       try {
-        const std::string path = (dir / d.filenames[j]).string();
-        const ImageF image = ToRgb(ReadImage(path));
+        ImageF image = ToRgb(ReadImage(path));
         if (image.width != w || image.height != h) {
           errors[j] = path + ": is " + std::to_string(image.width) + "x" +
                       std::to_string(image.height) + ", but the mask is " + std::to_string(w) +
                       "x" + std::to_string(h);
           continue;
         }
-        for (std::size_t i = 0; i < data.pixels.size(); ++i) {
-          const float* src = image.pixels.data() + 3 * static_cast<std::size_t>(data.pixels[i]);
-          float* dst = data.values.data() + (i * k + j) * 3;
-          for (int c = 0; c < 3; ++c) {
-            if (!std::isfinite(src[c])) {
-              errors[j] = path + ": has a non-finite value";
-              break;
-            }
-            dst[c] = srgb ? SrgbToLinear(src[c]) : src[c];
-          }
-          if (!errors[j].empty()) break;
+        if (srgb)
+          for (float& v : image.pixels) v = SrgbToLinear(v);
+        if (auto m = solve::GatherImage(data, static_cast<int>(j), image.pixels.data());
+            !m.empty()) {
+          errors[j] = path + ": " + m;
         }
       } catch (const std::exception& ex) {
         errors[j] = ex.what();

@@ -1,5 +1,7 @@
 #include "io/image_io.h"
 
+#include "io/staging.h"
+
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -63,26 +65,15 @@ void WriteImage(const std::string& path, const ImageF& image, const WriteOptions
                  is_float || options.encoding == Encoding::kLinear ? "Linear" : "sRGB");
   spec.attribute("Software", "iphong");
 
-  // Same extension, so OpenImageIO picks the same format for the temporary file.
-  const fs::path temp = target.parent_path() /
-                        ("." + target.stem().string() + ".partial" + target.extension().string());
-  {
-    auto out = OIIO::ImageOutput::create(temp.string());
-    if (!out) Fail(path, "no image writer for this format: " + OIIO::geterror());
-    if (!out->open(temp.string(), spec) ||
-        !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close()) {
-      const std::string error = out->geterror();
-      std::error_code ignored;
-      fs::remove(temp, ignored);
-      Fail(path, "cannot write: " + error);
+  WriteFileAtomically(path, [&](const std::string& temp) -> std::string {
+    auto out = OIIO::ImageOutput::create(temp);
+    if (!out) return "no image writer for this format: " + OIIO::geterror();
+    if (!out->open(temp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) ||
+        !out->close()) {
+      return "cannot write: " + out->geterror();
     }
-  }
-  std::error_code error;
-  fs::rename(temp, target, error);
-  if (error) {
-    fs::remove(temp, error);
-    Fail(path, "cannot move the finished image into place: " + error.message());
-  }
+    return "";
+  });
 }
 
 ImageF ReadImage(const std::string& path) {

@@ -1,5 +1,7 @@
 #include "io/mesh_io.h"
 
+#include "io/staging.h"
+
 // OpenMesh's IO header must come before the mesh kernel.
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
@@ -114,18 +116,10 @@ void SaveMesh(const std::string& path, const geometry::TriangleMesh& mesh,
   }
   OpenMesh::IO::Options io_options = OpenMesh::IO::Options::VertexNormal;
   if (vertex_colors) io_options += OpenMesh::IO::Options::VertexColor;
-  const fs::path target(path);
-  if (target.extension() == ".ply") io_options += OpenMesh::IO::Options::Binary;
-  const fs::path temp = target.parent_path() /
-                        ("." + target.stem().string() + ".partial" + target.extension().string());
-  if (!OpenMesh::IO::write_mesh(om, temp.string(), io_options)) {
-    std::error_code ignored;
-    fs::remove(temp, ignored);
-    throw std::runtime_error(path + ": cannot write the mesh");
-  }
-  std::error_code error;
-  fs::rename(temp, target, error);
-  if (error) throw std::runtime_error(path + ": " + error.message());
+  if (fs::path(path).extension() == ".ply") io_options += OpenMesh::IO::Options::Binary;
+  WriteFileAtomically(path, [&](const std::string& temp) -> std::string {
+    return OpenMesh::IO::write_mesh(om, temp, io_options) ? "" : "cannot write the mesh";
+  });
 }
 
 }  // namespace iphong::io

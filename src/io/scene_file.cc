@@ -8,6 +8,7 @@
 #include "geometry/primitives.h"
 #include "io/json_reader.h"
 #include "io/mesh_io.h"
+#include "io/text_file.h"
 
 namespace iphong::io {
 namespace fs = std::filesystem;
@@ -18,14 +19,6 @@ using reflectance::Light;
 using reflectance::Material;
 
 constexpr double kDeg = M_PI / 180.0;
-
-std::string ReadText(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw std::runtime_error(path + ": cannot open");
-  std::ostringstream text;
-  text << file.rdbuf();
-  return text.str();
-}
 
 std::string Resolve(const std::string& base_dir, const std::string& path) {
   const fs::path p(path);
@@ -57,12 +50,7 @@ Material ParseMaterial(const JsonReader& j) {
   }
   j.OnlyKeys({"preset", "ka", "kd", "ks", "shininess"});
   if (j.Has("preset")) m = ParseMaterial(j.Field("preset"));
-  m.ka = j.Rgb("ka", m.ka);
-  m.kd = j.Rgb("kd", m.kd);
-  m.ks = j.Rgb("ks", m.ks);
-  m.shininess = j.Number("shininess", m.shininess);
-  if (auto message = reflectance::ValidateMaterial(m); !message.empty()) j.Fail(message);
-  return m;
+  return ReadMaterialCoefficients(j, m);
 }
 
 std::vector<Light> ParseLight(const JsonReader& j) {
@@ -265,6 +253,15 @@ Camera ParseCamera(const JsonReader& root) {
 
 }  // namespace
 
+Material ReadMaterialCoefficients(const JsonReader& j, Material m) {
+  m.ka = j.Rgb("ka", m.ka);
+  m.kd = j.Rgb("kd", m.kd);
+  m.ks = j.Rgb("ks", m.ks);
+  m.shininess = j.Number("shininess", m.shininess);
+  if (auto message = reflectance::ValidateMaterial(m); !message.empty()) j.Fail(message);
+  return m;
+}
+
 SceneFile ParseScene(const std::string& json_text, const std::string& source,
                      const std::string& base_dir) {
   const nlohmann::json document = JsonReader::Parse(json_text, source);
@@ -332,7 +329,7 @@ SceneFile ParseScene(const std::string& json_text, const std::string& source,
 }
 
 SceneFile LoadSceneFile(const std::string& path) {
-  return ParseScene(ReadText(path), path, fs::path(path).parent_path().string());
+  return ParseScene(ReadTextFile(path), path, fs::path(path).parent_path().string());
 }
 
 }  // namespace iphong::io

@@ -47,6 +47,12 @@ struct SceneFile {
 };
 
 SceneFile LoadSceneFile(const std::string& path);
+
+class JsonReader;
+// Overlays the coefficients present in `j` ("ka", "kd", "ks" as RGB or one number,
+// "shininess") on `start` and validates the result; errors name the field. Scene files and
+// material.json both read coefficients through this.
+reflectance::Material ReadMaterialCoefficients(const JsonReader& j, reflectance::Material start);
 // `source` names the document in errors; relative paths resolve against `base_dir`.
 SceneFile ParseScene(const std::string& json_text, const std::string& source,
                      const std::string& base_dir);

@@ -2,11 +2,29 @@
 
 #include <unistd.h>
 
-#include <fstream>
 #include <stdexcept>
 
 namespace iphong::io {
 namespace fs = std::filesystem;
+
+void WriteFileAtomically(const std::string& path,
+                         const std::function<std::string(const std::string& temp)>& write) {
+  const fs::path target(path);
+  const fs::path temp = target.parent_path() /
+                        ("." + target.stem().string() + ".partial" + target.extension().string());
+  std::error_code error;
+  if (std::string failure = write(temp.string()); !failure.empty()) {
+    fs::remove(temp, error);
+    throw std::runtime_error(path + ": " + failure);
+  }
+  fs::rename(temp, target, error);
+  if (error) {
+    std::error_code ignored;
+    fs::remove(temp, ignored);
+    throw std::runtime_error(path +
+                             ": cannot move the finished file into place: " + error.message());
+  }
+}
 
 StagingDirectory::StagingDirectory(const std::string& target)
     : target_(fs::absolute(target).lexically_normal()) {
@@ -46,12 +64,6 @@ void StagingDirectory::Commit() {
   }
   committed_ = true;
   if (!old.empty()) fs::remove_all(old, error);
-}
-
-void WriteTextFile(const std::string& path, const std::string& text) {
-  std::ofstream file(path);
-  file << text;
-  if (!file) throw std::runtime_error(path + ": cannot write");
 }
 
 }  // namespace iphong::io

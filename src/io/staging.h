@@ -3,9 +3,17 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 
 namespace iphong::io {
+
+// Writes one file atomically: `write` gets a temporary path beside `path` (same extension, so
+// libraries that pick the format from it pick the same one) and returns "" on success or what went
+// wrong. Only a complete file replaces `path`; a failed one is removed. Throws std::runtime_error
+// "PATH: what went wrong".
+void WriteFileAtomically(const std::string& path,
+                         const std::function<std::string(const std::string& temp)>& write);
 
 class StagingDirectory {
  public:
@@ -23,8 +31,5 @@ class StagingDirectory {
   std::filesystem::path target_, staging_;
   bool committed_ = false;
 };
-
-// Writes text to a file; throws std::runtime_error naming it.
-void WriteTextFile(const std::string& path, const std::string& text);
 
 }  // namespace iphong::io

@@ -24,9 +24,9 @@ std::string PhotometricData::Validate() const {
   return "";
 }
 
-PhotometricData GatherObservations(const std::vector<const float*>& images, int width, int height,
-                                   const Mask& mask, const std::vector<Vec3d>& light_directions,
-                                   const std::vector<Vec3d>& light_intensities) {
+PhotometricData ObservationLayout(int width, int height, const Mask& mask,
+                                  const std::vector<Vec3d>& light_directions,
+                                  const std::vector<Vec3d>& light_intensities) {
   if (mask.width != width || mask.height != height) {
     throw std::invalid_argument("the mask is " + std::to_string(mask.width) + "x" +
                                 std::to_string(mask.height) + ", the images " +
@@ -35,23 +35,40 @@ PhotometricData GatherObservations(const std::vector<const float*>& images, int 
   PhotometricData data;
   data.width = width;
   data.height = height;
-  data.images = static_cast<int>(images.size());
+  data.images = static_cast<int>(light_directions.size());
   data.light_directions = light_directions;
   data.light_intensities = light_intensities;
   for (int p = 0; p < width * height; ++p)
     if (mask.inside[p]) data.pixels.push_back(p);
-  const std::size_t k = images.size();
-  data.values.resize(data.pixels.size() * k * 3);
+  data.values.assign(data.pixels.size() * data.images * 3, 0.0f);
+  return data;
+}
+
+std::string GatherImage(PhotometricData& data, int j, const float* rgb) {
+  const std::size_t k = data.images;
   for (std::size_t i = 0; i < data.pixels.size(); ++i) {
-    for (std::size_t j = 0; j < k; ++j) {
-      const float* src = images[j] + 3 * static_cast<std::size_t>(data.pixels[i]);
-      float* dst = data.values.data() + (i * k + j) * 3;
-      for (int c = 0; c < 3; ++c) {
-        if (!std::isfinite(src[c])) {
-          throw std::invalid_argument("image " + std::to_string(j + 1) + " has a non-finite value");
-        }
-        dst[c] = src[c];
-      }
+    const float* src = rgb + 3 * static_cast<std::size_t>(data.pixels[i]);
+    float* dst = data.values.data() + (i * k + j) * 3;
+    for (int c = 0; c < 3; ++c) {
+      if (!std::isfinite(src[c])) return "has a non-finite value";
+      dst[c] = src[c];
+    }
+  }
+  return "";
+}
+
+PhotometricData GatherObservations(const std::vector<const float*>& images, int width, int height,
+                                   const Mask& mask, const std::vector<Vec3d>& light_directions,
+                                   const std::vector<Vec3d>& light_intensities) {
+  if (images.size() != light_directions.size()) {
+    throw std::invalid_argument(std::to_string(images.size()) + " images but " +
+                                std::to_string(light_directions.size()) + " light directions");
+  }
+  PhotometricData data =
+      ObservationLayout(width, height, mask, light_directions, light_intensities);
+  for (std::size_t j = 0; j < images.size(); ++j) {
+    if (auto m = GatherImage(data, static_cast<int>(j), images[j]); !m.empty()) {
+      throw std::invalid_argument("image " + std::to_string(j + 1) + " " + m);
     }
   }
   if (auto m = data.Validate(); !m.empty()) throw std::invalid_argument(m);

@@ -27,6 +27,16 @@ struct PhotometricData {
   std::string Validate() const;
 };
 
+// The observations' layout for K images: the masked pixels and the lights, values zeroed.
+// Throws std::invalid_argument when the mask is not width×height.
+PhotometricData ObservationLayout(int width, int height, const Mask& mask,
+                                  const std::vector<Vec3d>& light_directions,
+                                  const std::vector<Vec3d>& light_intensities);
+
+// Copies the masked pixels of image j (width×height×3, row-major from the top) into `data`.
+// Returns "" or what is wrong with the image. Images may be gathered concurrently.
+std::string GatherImage(PhotometricData& data, int j, const float* rgb);
+
 // Gathers the masked pixels of K images (each width×height×3, row-major from the top).
 // Throws std::invalid_argument when sizes, counts or lights are inconsistent or not finite.
 PhotometricData GatherObservations(const std::vector<const float*>& images, int width, int height,
