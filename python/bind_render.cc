@@ -5,6 +5,7 @@
 
 #include <cstring>
 
+#include "arrays.h"
 #include "bindings.h"
 #include "io/dataset.h"
 #include "io/scene_file.h"
@@ -14,44 +15,6 @@ namespace py = pybind11;
 
 namespace iphong::python {
 namespace {
-
-// (H, W, C) float32 copy of an image; (H, W) when `squeeze` and C == 1.
-py::array_t<float> ToArray(const ImageF& image, bool squeeze = false) {
-  std::vector<py::ssize_t> shape = {image.height, image.width};
-  if (!(squeeze && image.channels == 1)) shape.push_back(image.channels);
-  py::array_t<float> array(shape);
-  std::memcpy(array.mutable_data(), image.pixels.data(), image.pixels.size() * sizeof(float));
-  return array;
-}
-
-py::array_t<bool> ToArray(const Mask& mask) {
-  py::array_t<bool> array({mask.height, mask.width});
-  bool* out = array.mutable_data();
-  for (std::size_t p = 0; p < mask.inside.size(); ++p) out[p] = mask.inside[p] != 0;
-  return array;
-}
-
-py::array_t<double> ToArray(const std::vector<Vec3d>& rows) {
-  py::array_t<double> array({static_cast<py::ssize_t>(rows.size()), py::ssize_t{3}});
-  double* out = array.mutable_data();
-  for (std::size_t i = 0; i < rows.size(); ++i)
-    for (int c = 0; c < 3; ++c) out[3 * i + c] = rows[i][c];
-  return array;
-}
-
-py::array_t<float> Stack(const std::vector<ImageF>& images) {
-  if (images.empty()) return py::array_t<float>(std::vector<py::ssize_t>{0, 0, 0, 3});
-  const ImageF& first = images.front();
-  py::array_t<float> array(
-      {static_cast<py::ssize_t>(images.size()), static_cast<py::ssize_t>(first.height),
-       static_cast<py::ssize_t>(first.width), static_cast<py::ssize_t>(first.channels)});
-  float* out = array.mutable_data();
-  for (const ImageF& image : images) {
-    std::memcpy(out, image.pixels.data(), image.pixels.size() * sizeof(float));
-    out += image.pixels.size();
-  }
-  return array;
-}
 
 py::dict RenderScene(const io::SceneFile& file, bool per_light) {
   render::RenderOutput out;
@@ -63,7 +26,7 @@ py::dict RenderScene(const io::SceneFile& file, bool per_light) {
   result["image"] = ToArray(out.image);
   if (per_light) result["images"] = Stack(out.per_light);
   result["normals"] = ToArray(out.normal_cam);
-  result["depth"] = ToArray(out.depth, true);
+  result["depth"] = ToArray(out.depth);
   result["albedo"] = ToArray(out.albedo);
   result["mask"] = ToArray(out.mask);
   std::vector<Vec3d> directions, intensities;

@@ -5,6 +5,7 @@
 
 #include <cstring>
 
+#include "arrays.h"
 #include "bindings.h"
 #include "solve/few_images.h"
 #include "solve/metrics.h"
@@ -49,14 +50,6 @@ ImageF ToImage(const py::object& value, const char* what) {
   ImageF image(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)), 3);
   std::memcpy(image.pixels.data(), a.data(), image.pixels.size() * sizeof(float));
   return image;
-}
-
-py::array_t<float> ToArray(const ImageF& image) {
-  std::vector<py::ssize_t> shape = {image.height, image.width};
-  if (image.channels > 1) shape.push_back(image.channels);
-  py::array_t<float> array(shape);
-  std::memcpy(array.mutable_data(), image.pixels.data(), image.pixels.size() * sizeof(float));
-  return array;
 }
 
 }  // namespace

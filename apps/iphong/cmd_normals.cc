@@ -2,12 +2,12 @@
 // with ground truth, the angular errors. `iphong eval EST.exr GT`: the same metrics for any map.
 #include <unistd.h>
 
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
 
+#include "core/timing.h"
 #include "io/dataset.h"
 #include "io/image_io.h"
 #include "io/staging.h"
@@ -20,12 +20,6 @@
 
 namespace iphong::cli {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 struct NormalsCommandOptions {
   std::string dataset;
@@ -83,7 +77,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   }
 
   const solve::PhotometricData& data = loaded.observations;  // masked pixels only
-  const double load_seconds = Seconds(total_start);
+  const double load_seconds = SecondsSince(total_start);
 
   solve::NormalResult result;
   ImageF ambiguity;
@@ -162,7 +156,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   }
   if (errors)
     io::WriteErrorMap(out.file("error.png"), errors->error_deg, dataset.mask, ErrorScale(*errors));
-  metrics["total_seconds"] = Seconds(total_start);
+  metrics["total_seconds"] = SecondsSince(total_start);
   io::WriteTextFile(out.file("metrics.json"), metrics.dump(2) + "\n");
   out.Commit();
 

@@ -1,13 +1,13 @@
 #include "render/renderer.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <optional>
 #include <random>
 #include <stdexcept>
 
 #include "core/parallel.h"
+#include "core/timing.h"
 #include "reflectance/shade.h"
 #include "render/rasterizer.h"
 
@@ -19,11 +19,6 @@ using geometry::CameraType;
 using reflectance::Light;
 using reflectance::LightType;
 using reflectance::Material;
-using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 void Require(const std::string& message) {
   if (!message.empty()) throw std::invalid_argument(message);
@@ -336,7 +331,7 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
                   [](const SceneObject& o) { return !o.albedo_texture.pixels.empty(); });
   raster.threads = options.threads;
   GBuffer gbuffer = Rasterize(items, camera, raster);
-  double raster_seconds = Seconds(raster_start);
+  double raster_seconds = SecondsSince(raster_start);
 
   const auto shade_start = Clock::now();
   const PointShader shade{scene, camera, options, shadows};
@@ -398,7 +393,7 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
       }
       const auto t0 = Clock::now();
       const GBuffer colored_buffer = Rasterize(colored, camera, raster);
-      raster_seconds += Seconds(t0);
+      raster_seconds += SecondsSince(t0);
       for (std::size_t p = 0; p < pixels; ++p) {
         if (!colored_buffer.covered(p)) continue;
         for (int c = 0; c < 3; ++c)
@@ -442,7 +437,7 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
     }
   }
   out.raster_seconds = raster_seconds;
-  out.shade_seconds = Seconds(shade_start);
+  out.shade_seconds = SecondsSince(shade_start);
   return out;
 }
 

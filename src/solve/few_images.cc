@@ -3,11 +3,11 @@
 #include <ceres/ceres.h>
 #include <ceres/sphere_manifold.h>
 
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
 #include "core/parallel.h"
+#include "core/timing.h"
 #include "reflectance/phong.h"
 #include "solve/internal.h"
 
@@ -141,7 +141,7 @@ FewImageResult EstimateNormalsFewImages(const PhotometricData& data,
     throw std::invalid_argument("the global few-image solver takes 1 or 2 images, got " +
                                 std::to_string(data.images));
   }
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   const int w = data.width, h = data.height;
   const std::size_t pixels = data.pixel_count();
   std::vector<int> index(static_cast<std::size_t>(w) * h, -1);
@@ -248,8 +248,7 @@ FewImageResult EstimateNormalsFewImages(const PhotometricData& data,
   }
   result.iterations = iterations;
   result.final_cost = summary.final_cost;
-  result.solve_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.solve_seconds = SecondsSince(start);
   result.message = summary.BriefReport();
   return result;
 }
