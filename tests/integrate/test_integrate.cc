@@ -1,0 +1,405 @@
+// Integration of normal maps: analytic surfaces, the seed-003 profile, spectral vs sparse
+// solvers, depth steps, perspective log depth, priors, meshes and bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "geometry/height_map.h"
+#include "integrate/integrate.h"
+#include "solve/few_images.h"
+
+namespace iphong::integrate {
+namespace {
+
+// z, ∂z/∂x, ∂z/∂y at camera-frame pixel coordinates (x right, y up, origin at the image centre).
+struct Sample {
+  double z, p, q;
+};
+using Surface = std::function<Sample(double x, double y)>;
+using Region = std::function<bool(double x, double y)>;
+
+struct Synthetic {
+  ImageF normals;
+  Mask mask;
+  ImageF truth;  // heights, NaN outside
+};
+
+Synthetic MakeSynthetic(int w, int h, const Surface& surface, const Region& region) {
+  Synthetic s{ImageF(w, h, 3, 0.0f), Mask(w, h, false), ImageF(w, h, 1, NAN)};
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) {
+      const double x = c + 0.5 - 0.5 * w, y = 0.5 * h - r - 0.5;
+      if (!region(x, y)) continue;
+      const Sample v = surface(x, y);
+      Vec3d n(-v.p, -v.q, 1);
+      n.normalize();
+      float* o = s.normals.at(c, r);
+      o[0] = n.x(), o[1] = n.y(), o[2] = n.z();
+      s.mask.inside[static_cast<std::size_t>(r) * w + c] = 1;
+      *s.truth.at(c, r) = static_cast<float>(v.z);
+    }
+  }
+  return s;
+}
+
+// RMSE after removing the mean difference, relative to the truth's range over the mask.
+double RelativeRmse(const ImageF& estimate, const ImageF& truth, const Mask& mask,
+                    const Mask* subset = nullptr) {
+  double mean = 0, lo = INFINITY, hi = -INFINITY;
+  std::size_t n = 0;
+  const Mask& m = subset ? *subset : mask;
+  for (std::size_t p = 0; p < m.inside.size(); ++p) {
+    if (!m.inside[p]) continue;
+    mean += estimate.pixels[p] - truth.pixels[p];
+    lo = std::min<double>(lo, truth.pixels[p]), hi = std::max<double>(hi, truth.pixels[p]);
+    ++n;
+  }
+  mean /= n;
+  double sq = 0;
+  for (std::size_t p = 0; p < m.inside.size(); ++p) {
+    if (!m.inside[p]) continue;
+    const double e = estimate.pixels[p] - truth.pixels[p] - mean;
+    sq += e * e;
+  }
+  return std::sqrt(sq / n) / (hi - lo);
+}
+
+Surface SphereCap(double radius, double center_z = 0) {
+  return [=](double x, double y) {
+    const double z = std::sqrt(std::max(radius * radius - x * x - y * y, 1e-12));
+    return Sample{center_z + z, -x / z, -y / z};
+  };
+}
+
+Surface BumpAndRipples() {
+  return [](double x, double y) {
+    const double s = 30, a = 25, b = 1.5, k = 2 * M_PI / 24;
+    const double g = a * std::exp(-(x * x + y * y) / (2 * s * s));
+    const double rho = std::hypot(x, y) + 1e-12;
+    const double ripple = b * std::sin(k * rho), d_ripple = b * k * std::cos(k * rho);
+    return Sample{g + ripple, -x / (s * s) * g + d_ripple * x / rho,
+                  -y / (s * s) * g + d_ripple * y / rho};
+  };
+}
+
+TEST(Integrate, SphereCapQuadraticWithinHalfPercent) {
+  // A cap of a radius-100 sphere seen over a disc of radius 80 (nz ≥ 0.6).
+  const Synthetic s = MakeSynthetic(200, 180, SphereCap(100),
+                                    [](double x, double y) { return x * x + y * y < 80 * 80; });
+  const IntegrateResult result = IntegrateNormals(s.normals, s.mask, {});
+  EXPECT_EQ(result.summary.method, Method::kQuadratic);
+  const double error = RelativeRmse(result.height, s.truth, s.mask);
+  EXPECT_LT(error, 0.005);
+  // Seen almost to its rim (nz down to 0.14 at radius 99): still inside the bound.
+  const Synthetic rim = MakeSynthetic(220, 220, SphereCap(100),
+                                      [](double x, double y) { return x * x + y * y < 99 * 99; });
+  EXPECT_LT(RelativeRmse(IntegrateNormals(rim.normals, rim.mask, {}).height, rim.truth, rim.mask),
+            0.005);
+}
+
+TEST(Integrate, BumpAndRipplesOnAnEllipse) {
+  const Synthetic s = MakeSynthetic(240, 200, BumpAndRipples(), [](double x, double y) {
+    return x * x / (110.0 * 110) + y * y / (80.0 * 80) < 1;
+  });
+  const IntegrateResult result = IntegrateNormals(s.normals, s.mask, {});
+  EXPECT_LT(RelativeRmse(result.height, s.truth, s.mask), 0.005);
+  EXPECT_EQ(result.summary.components, 1);
+  // Zero mean over the mask, NaN outside.
+  double sum = 0;
+  for (std::size_t p = 0; p < s.mask.inside.size(); ++p) {
+    if (s.mask.inside[p])
+      sum += result.height.pixels[p];
+    else
+      EXPECT_TRUE(std::isnan(result.height.pixels[p]));
+  }
+  EXPECT_NEAR(sum / s.mask.count(), 0.0, 1e-6);
+}
+
+TEST(Integrate, TorusTopWithAHole) {
+  const double ring = 60, tube = 25;
+  const Surface torus = [=](double x, double y) {
+    const double rho = std::hypot(x, y), d = rho - ring;
+    const double z = std::sqrt(std::max(tube * tube - d * d, 1e-12));
+    // ∂z/∂ρ = −d/z along the radial direction.
+    return Sample{z, -d / z * x / rho, -d / z * y / rho};
+  };
+  const Synthetic s = MakeSynthetic(180, 180, torus, [=](double x, double y) {
+    return std::abs(std::hypot(x, y) - ring) < 0.97 * tube;
+  });
+  const IntegrateResult result = IntegrateNormals(s.normals, s.mask, {});
+  EXPECT_LT(RelativeRmse(result.height, s.truth, s.mask), 0.005);
+}
+
+TEST(Integrate, DctAndFftMatchTheSparseSolverOnRectangles) {
+  const Region all = [](double, double) { return true; };
+  // A smooth, non-periodic surface over the whole image; odd width takes the mirrored DFT path.
+  for (int w : {96, 97}) {
+    const Synthetic s = MakeSynthetic(w, 80, BumpAndRipples(), all);
+    IntegrateOptions dct;
+    const IntegrateResult a = IntegrateNormals(s.normals, s.mask, dct);
+    EXPECT_EQ(a.summary.method, Method::kDct);
+    EXPECT_LT(RelativeRmse(a.height, s.truth, s.mask), 0.005);
+    IntegrateOptions sparse;
+    sparse.method = Method::kQuadratic;
+    sparse.solver = LinearSolver::kCholesky;
+    const IntegrateResult b = IntegrateNormals(s.normals, s.mask, sparse);
+    // Same least-squares problem up to the sparse solver's view-angle edge weights.
+    EXPECT_LT(RelativeRmse(a.height, b.height, s.mask), 5e-5) << w;
+  }
+  // Frankot–Chellappa is exact for a periodic surface.
+  const int w = 128, h = 96;
+  const Surface periodic = [=](double x, double y) {
+    const double kx = 2 * M_PI / w, ky = 4 * M_PI / h, a = 6;
+    return Sample{a * std::sin(kx * x) * std::cos(ky * y),
+                  a * kx * std::cos(kx * x) * std::cos(ky * y),
+                  -a * ky * std::sin(kx * x) * std::sin(ky * y)};
+  };
+  const Synthetic s = MakeSynthetic(w, h, periodic, all);
+  IntegrateOptions fft;
+  fft.method = Method::kFft;
+  EXPECT_LT(RelativeRmse(IntegrateNormals(s.normals, s.mask, fft).height, s.truth, s.mask), 2e-3);
+}
+
+TEST(Integrate, CholeskyAndMultigridAgree) {
+  const Synthetic s = MakeSynthetic(160, 120, BumpAndRipples(), [](double x, double y) {
+    return x * x / (70.0 * 70) + y * y / (50.0 * 50) < 1;
+  });
+  IntegrateOptions direct, iterative;
+  direct.solver = LinearSolver::kCholesky;
+  iterative.solver = LinearSolver::kConjugateGradient;
+  iterative.cg_tolerance = 1e-10;
+  const IntegrateResult a = IntegrateNormals(s.normals, s.mask, direct);
+  const IntegrateResult b = IntegrateNormals(s.normals, s.mask, iterative);
+  EXPECT_GT(b.summary.iterations, 0);
+  EXPECT_LT(b.summary.iterations, 40);  // multigrid: a few tens, not thousands
+  for (std::size_t p = 0; p < s.mask.inside.size(); ++p) {
+    if (s.mask.inside[p]) {
+      ASSERT_NEAR(a.height.pixels[p], b.height.pixels[p], 1e-4);
+    }
+  }
+}
+
+TEST(Integrate, SeparatePartsEachGetZeroMean) {
+  const Synthetic s = MakeSynthetic(120, 60, BumpAndRipples(), [](double x, double y) {
+    return std::hypot(x + 30, y) < 20 || std::hypot(x - 30, y) < 20;
+  });
+  const IntegrateResult result = IntegrateNormals(s.normals, s.mask, {});
+  EXPECT_EQ(result.summary.components, 2);
+  double left = 0, right = 0;
+  for (int r = 0; r < 60; ++r) {
+    for (int c = 0; c < 120; ++c) {
+      if (s.mask.at(c, r)) (c < 60 ? left : right) += *result.height.at(c, r);
+    }
+  }
+  EXPECT_NEAR(left, 0, 1e-6 * s.mask.count());
+  EXPECT_NEAR(right, 0, 1e-6 * s.mask.count());
+}
+
+// A ball resting above a floor: at its silhouette the depth jumps by 15 pixels.
+TEST(Integrate, BilateralKeepsADepthStepTheQuadraticSmears) {
+  const double radius = 40, lift = 15;
+  const Surface scene = [=](double x, double y) {
+    if (x * x + y * y < radius * radius) return SphereCap(radius, lift)(x, y);
+    return Sample{0.3 * x, 0.3, 0};  // a tilted floor
+  };
+  const Synthetic s = MakeSynthetic(160, 140, scene, [](double, double) { return true; });
+  Mask floor(160, 140, false), ball(160, 140, false);
+  for (int r = 0; r < 140; ++r) {
+    for (int c = 0; c < 160; ++c) {
+      const double x = c + 0.5 - 80, y = 70 - r - 0.5, rho = std::hypot(x, y);
+      floor.inside[r * 160 + c] = rho > radius + 2;
+      ball.inside[r * 160 + c] = rho < radius - 2;
+    }
+  }
+  IntegrateOptions quadratic;
+  quadratic.method = Method::kQuadratic;
+  IntegrateOptions bilateral;
+  bilateral.method = Method::kBilateral;
+  const IntegrateResult q = IntegrateNormals(s.normals, s.mask, quadratic);
+  const IntegrateResult b = IntegrateNormals(s.normals, s.mask, bilateral);
+  const double floor_q = RelativeRmse(q.height, s.truth, s.mask, &floor);
+  const double floor_b = RelativeRmse(b.height, s.truth, s.mask, &floor);
+  const double ball_q = RelativeRmse(q.height, s.truth, s.mask, &ball);
+  const double ball_b = RelativeRmse(b.height, s.truth, s.mask, &ball);
+  RecordProperty("floor_rmse_quadratic", std::to_string(floor_q));
+  RecordProperty("floor_rmse_bilateral", std::to_string(floor_b));
+  std::printf("floor %.4f -> %.4f, ball %.4f -> %.4f, rounds %d\n", floor_q, floor_b, ball_q,
+              ball_b, b.summary.rounds);
+  EXPECT_LT(floor_b, 0.25 * floor_q);
+  EXPECT_LT(ball_b, 0.25 * ball_q);
+  EXPECT_LT(floor_b, 0.01);
+  // The silhouette is cut: some edges there have continuity near 0.
+  int cut = 0;
+  for (std::size_t p = 0; p < b.continuity.pixel_count(); ++p) {
+    cut += b.continuity.pixels[2 * p] < 0.25f;
+  }
+  EXPECT_GT(cut, 40);
+}
+
+// Perspective: a sphere in front of a pinhole camera; log-depth integration recovers depth up to
+// scale, and a prior at a few pixels fixes the scale.
+TEST(Integrate, PerspectiveSphereLogDepth) {
+  const int w = 160, h = 120;
+  const double f = 150, cx = 80, cy = 60, radius = 1.0;
+  const Vec3d centre(0.1, -0.05, -4.0);  // camera frame: x right, y up, z toward the viewer
+  ImageF normals(w, h, 3, 0.0f), depth(w, h, 1, NAN);
+  Mask mask(w, h, false);
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) {
+      const Vec3d ray = Vec3d((c + 0.5 - cx) / f, -(r + 0.5 - cy) / f, -1.0);
+      // |t·ray − centre| = radius, nearest t (depth along the axis is t since ray.z = −1).
+      const double a = ray.squaredNorm(), b = -2 * ray.dot(centre),
+                   cc = centre.squaredNorm() - radius * radius;
+      const double disc = b * b - 4 * a * cc;
+      if (disc <= 0) continue;
+      const double t = (-b - std::sqrt(disc)) / (2 * a);
+      const Vec3d n = (t * ray - centre).normalized();
+      if (-n.dot(ray.normalized()) < 0.2) continue;  // keep away from the grazing rim
+      float* o = normals.at(c, r);
+      o[0] = n.x(), o[1] = n.y(), o[2] = n.z();
+      mask.inside[r * w + c] = 1;
+      *depth.at(c, r) = static_cast<float>(t);
+    }
+  }
+  IntegrateOptions options;
+  options.perspective = true;
+  options.intrinsics = {f, f, cx, cy};
+  const IntegrateResult result = IntegrateNormals(normals, mask, options);
+  // Ratio estimate / truth is one constant.
+  std::vector<double> ratios;
+  for (std::size_t p = 0; p < mask.inside.size(); ++p) {
+    if (mask.inside[p]) ratios.push_back(std::log(result.height.pixels[p] / depth.pixels[p]));
+  }
+  double mean = 0, sq = 0;
+  for (double v : ratios) mean += v;
+  mean /= ratios.size();
+  for (double v : ratios) sq += (v - mean) * (v - mean);
+  EXPECT_LT(std::sqrt(sq / ratios.size()), 2e-3);  // relative depth error
+  // Three pixels of known depth fix the scale.
+  options.depth_prior = ImageF(w, h, 1, NAN);
+  int given = 0;
+  for (std::size_t p = 0; p < mask.inside.size() && given < 3; p += 997) {
+    if (mask.inside[p]) options.depth_prior.pixels[p] = depth.pixels[p], ++given;
+  }
+  const IntegrateResult scaled = IntegrateNormals(normals, mask, options);
+  double worst = 0;
+  for (std::size_t p = 0; p < mask.inside.size(); ++p) {
+    if (mask.inside[p]) {
+      worst = std::max(worst, std::abs(double(scaled.height.pixels[p]) / depth.pixels[p] - 1));
+    }
+  }
+  EXPECT_LT(worst, 5e-3);
+}
+
+TEST(Integrate, OrthographicPriorFixesOffsetAndPixelSizeScales) {
+  const Synthetic s = MakeSynthetic(100, 100, SphereCap(100),
+                                    [](double x, double y) { return x * x + y * y < 40 * 40; });
+  IntegrateOptions options;
+  options.pixel_size = 0.5;
+  options.depth_prior = ImageF(100, 100, 1, NAN);
+  *options.depth_prior.at(50, 50) = 0.5f * *s.truth.at(50, 50);  // heights in scene units
+  const IntegrateResult result = IntegrateNormals(s.normals, s.mask, options);
+  for (int r = 20; r < 80; r += 7) {
+    for (int c = 20; c < 80; c += 7) {
+      if (s.mask.at(c, r)) {
+        EXPECT_NEAR(*result.height.at(c, r), 0.5 * *s.truth.at(c, r), 0.1);
+      }
+    }
+  }
+}
+
+// Seed 003: one light at 45° over a cylinder; the two closed-form normals per pixel, the true
+// branch picked, then the line integral gives the profile back.
+TEST(Integrate, Seed003CylinderLineIntegral) {
+  const double radius = 1.0, step = 0.01;
+  const Eigen::Vector2d light(0.71, 0.71);
+  std::vector<Eigen::Vector2d> normals;
+  std::vector<double> truth;
+  for (double x = -0.9; x <= 0.9 + 1e-9; x += step) {
+    const Eigen::Vector2d n(x / radius, std::sqrt(1 - x * x) / radius);
+    const double shading = light.normalized().dot(n);
+    const auto both = solve::ProfileNormals(shading, light);
+    // The prior: the true branch is the one continuous with the normal seen at the centre
+    // (here: the one whose Nx has the sign of x).
+    normals.push_back(std::abs(both[0].x() - x) < std::abs(both[1].x() - x) ? both[0] : both[1]);
+    truth.push_back(std::sqrt(radius * radius - x * x));
+  }
+  const std::vector<double> heights = IntegrateProfile(normals, step);
+  double worst = 0;
+  for (std::size_t i = 0; i < heights.size(); ++i) {
+    worst = std::max(worst, std::abs(heights[i] + truth[0] - truth[i]));
+  }
+  EXPECT_LT(worst, 2e-3);
+}
+
+TEST(Integrate, BadInputIsAOneLineError) {
+  ImageF normals(4, 3, 3, 0.0f);
+  Mask mask(4, 3, true);
+  for (std::size_t p = 0; p < normals.pixel_count(); ++p) normals.pixels[3 * p + 2] = 1;
+  auto message = [&](const ImageF& n, const Mask& m, const IntegrateOptions& o = {}) {
+    try {
+      IntegrateNormals(n, m, o);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message(normals, Mask(5, 3, true)), "mask is 5x3 but the normal map is 4x3");
+  EXPECT_EQ(message(normals, Mask(4, 3, false)), "the mask is empty");
+  ImageF bad = normals;
+  bad.at(2, 1)[0] = NAN;
+  EXPECT_EQ(message(bad, mask), "non-finite normal at pixel (col 2, row 1)");
+  bad = normals;
+  bad.at(1, 2)[2] = 0.5f;
+  EXPECT_NE(message(bad, mask).find("is not unit"), std::string::npos);
+  bad = normals;
+  bad.at(0, 0)[2] = -1;
+  EXPECT_NE(message(bad, mask).find("faces away from the camera"), std::string::npos);
+  IntegrateOptions o;
+  o.perspective = true;
+  EXPECT_NE(message(normals, mask, o).find("intrinsics"), std::string::npos);
+  EXPECT_THROW(ParseMethod("poisson"), std::invalid_argument);
+}
+
+TEST(HeightMap, MeshTrianglesFaceTheViewerAndRespectCuts) {
+  ImageF height(3, 3, 1, 0.0f);
+  Mask mask(3, 3, true);
+  geometry::TriangleMesh mesh = geometry::MeshFromHeightMap(height, mask, {});
+  EXPECT_EQ(mesh.positions.size(), 9u);
+  EXPECT_EQ(mesh.triangles.size(), 8u);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    EXPECT_GT(geometry::FaceNormal(mesh, t).z(), 0.99);
+  }
+  EXPECT_EQ(mesh.Validate(), "");
+  // A corner pixel outside: 6 triangles remain plus the 1 spanning three corners of that block.
+  mask.inside[0] = 0;
+  EXPECT_EQ(geometry::MeshFromHeightMap(height, mask, {}).triangles.size(), 7u);
+  // A cut vertical edge between columns 0 and 1 on both rows keeps the left blocks out.
+  mask.inside[0] = 1;
+  ImageF continuity(3, 3, 2, 1.0f);
+  for (int r = 0; r < 3; ++r) continuity.at(0, r)[0] = 0;
+  geometry::HeightMeshOptions options;
+  options.continuity = &continuity;
+  EXPECT_EQ(geometry::MeshFromHeightMap(height, mask, {}, options).triangles.size(), 4u);
+}
+
+TEST(HeightMap, NormalsOfATiltedPlane) {
+  ImageF height(5, 4, 1);
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 5; ++c) *height.at(c, r) = 0.5f * c - 0.25f * r;  // rows run down: +y
+  }
+  const ImageF n = geometry::NormalsFromHeightMap(height, Mask(5, 4, true), {});
+  const Vec3d expected = Vec3d(-0.5, -0.25, 1).normalized();
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 5; ++c) {
+      const float* v = n.at(c, r);
+      EXPECT_NEAR(v[0], expected.x(), 1e-6);
+      EXPECT_NEAR(v[1], expected.y(), 1e-6);
+      EXPECT_NEAR(v[2], expected.z(), 1e-6);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace iphong::integrate

@@ -1,0 +1,77 @@
+// DiLiGenT ground-truth normals (../shared/data, skipped when absent) integrate to a surface
+// whose own normals agree with them; the mesh written from it reads back.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+
+#include "geometry/height_map.h"
+#include "integrate/integrate.h"
+#include "io/dataset.h"
+#include "io/mesh_io.h"
+#include "solve/metrics.h"
+
+namespace iphong::integrate {
+namespace {
+
+std::string DataDir() {
+  const char* env = std::getenv("IPHONG_DATA_DIR");
+  return env ? env : IPHONG_SOURCE_DIR "/../shared/data";
+}
+
+struct Case {
+  const char* path;
+  Method method;
+  double bound_deg;  // mean angle between the input normals and the surface's own
+};
+void PrintTo(const Case& c, std::ostream* os) { *os << c.path << " " << MethodName(c.method); }
+
+class IntegrateRealData : public ::testing::TestWithParam<Case> {};
+
+TEST_P(IntegrateRealData, GroundTruthNormalsIntegrateToAConsistentSurface) {
+  const std::string dir = DataDir() + "/" + GetParam().path;
+  if (!std::filesystem::exists(dir)) GTEST_SKIP() << "no real data at " << dir;
+  io::DatasetLoadOptions load;
+  load.load_images = false;
+  const io::Dataset d = io::LoadDataset(dir, load);
+  ASSERT_GT(d.normal_gt.channels, 0) << "no ground truth in " << dir;
+  // The ground truth is zero on a few mask pixels: integrate where it is defined.
+  Mask mask = d.mask;
+  for (std::size_t p = 0; p < mask.inside.size(); ++p) {
+    const float* n = d.normal_gt.pixels.data() + 3 * p;
+    if (!(n[2] > 0)) mask.inside[p] = 0;
+  }
+  IntegrateOptions options;
+  options.method = GetParam().method;
+  const IntegrateResult result = IntegrateNormals(d.normal_gt, mask, options);
+  const ImageF back = geometry::NormalsFromHeightMap(result.height, mask, {});
+  const solve::AngularErrorMetrics m = solve::CompareNormals(back, d.normal_gt, mask);
+  std::printf(
+      "%s %s: %zu px, %.3f s (%s, %lld iterations), re-differentiated normals: mean %.2f "
+      "median %.2f deg\n",
+      GetParam().path, MethodName(GetParam().method), result.summary.pixels,
+      result.summary.total_seconds, result.summary.solver.c_str(), result.summary.iterations,
+      m.mean_deg, m.median_deg);
+  RecordProperty("mean_deg", std::to_string(m.mean_deg));
+  EXPECT_LT(m.mean_deg, GetParam().bound_deg);
+
+  // The mesh of the surface goes through OpenMesh and back.
+  const geometry::TriangleMesh mesh = geometry::MeshFromHeightMap(result.height, mask, {});
+  const std::string path =
+      testing::TempDir() + "/iphong_" +
+      std::string(GetParam().path).substr(std::string(GetParam().path).rfind('/') + 1) + ".ply";
+  io::SaveMesh(path, mesh);
+  const geometry::TriangleMesh read = io::LoadMesh(path);
+  EXPECT_EQ(read.positions.size(), mesh.positions.size());
+  EXPECT_EQ(read.triangles.size(), mesh.triangles.size());
+  std::filesystem::remove(path);
+}
+
+INSTANTIATE_TEST_SUITE_P(Diligent, IntegrateRealData,
+                         ::testing::Values(Case{"diligent/ball", Method::kQuadratic, 3.0},
+                                           Case{"diligent/cat", Method::kQuadratic, 6.0},
+                                           Case{"diligent/cat", Method::kBilateral, 6.0},
+                                           Case{"diligent-crop8/pot1", Method::kQuadratic, 6.0}));
+
+}  // namespace
+}  // namespace iphong::integrate
