@@ -8,9 +8,11 @@
 #include <optional>
 
 #include "core/timing.h"
+#include "integrate/integrate.h"
 #include "io/dataset.h"
 #include "io/image_io.h"
 #include "io/staging.h"
+#include "io/surface.h"
 #include "io/text_file.h"
 #include "io/visualize.h"
 #include "iphong/commands.h"
@@ -31,6 +33,7 @@ struct NormalsCommandOptions {
   double robust_scale = solve::NormalOptions{}.robust_scale;
   int irls_rounds = solve::NormalOptions{}.irls_rounds;
   bool fast = false;
+  bool integrate = false;
   int threads = 0;
 };
 
@@ -156,6 +159,28 @@ void RunNormals(const NormalsCommandOptions& o) {
   }
   if (errors)
     io::WriteErrorMap(out.file("error.png"), errors->error_deg, dataset.mask, ErrorScale(*errors));
+  std::optional<io::SurfaceFiles> surface;
+  integrate::IntegrateResult heights;
+  if (o.integrate) {
+    // Pixels without a normal (dark everywhere) are left out; silhouette normals may tip
+    // slightly past 90°.
+    Mask with_normal = dataset.mask;
+    for (std::size_t p = 0; p < with_normal.inside.size(); ++p) {
+      if (result.normals.pixels[3 * p + 2] == 0 && result.normals.pixels[3 * p] == 0) {
+        with_normal.inside[p] = 0;
+      }
+    }
+    integrate::IntegrateOptions integration;
+    integration.allow_back_facing = true;
+    integration.threads = o.threads;
+    heights = integrate::IntegrateNormals(result.normals, with_normal, integration);
+    io::SurfaceFileOptions files;
+    files.albedo = &result.albedo;
+    files.threads = o.threads;
+    surface = io::WriteSurfaceFiles(out, heights, result.normals, with_normal,
+                                    io::FrameOf(integration), files);
+    metrics["integrate_seconds"] = heights.summary.total_seconds;
+  }
   metrics["total_seconds"] = SecondsSince(total_start);
   io::WriteTextFile(out.file("metrics.json"), metrics.dump(2) + "\n");
   out.Commit();
@@ -194,9 +219,18 @@ void RunNormals(const NormalsCommandOptions& o) {
         errors->mean_deg, errors->median_deg, 100 * errors->below_5_deg, 100 * errors->below_10_deg,
         100 * errors->below_20_deg);
   }
-  std::printf("Wrote %s: normals.exr, normals.png, albedo.exr, residual.exr, metrics.json%s%s%s\n",
-              o.output_dir.c_str(), result.material_estimated ? ", material.json" : "",
-              errors ? ", error.png" : "", ambiguity.pixels.empty() ? "" : ", ambiguity.exr");
+  if (surface) {
+    std::printf(
+        "Integrated heights (%s, %.3f s): surface normals vs recovered: mean %.2f deg; "
+        "mesh %zu triangles\n",
+        integrate::MethodName(heights.summary.method), heights.summary.total_seconds,
+        surface->consistency_mean_deg, surface->triangles);
+  }
+  std::printf(
+      "Wrote %s: normals.exr, normals.png, albedo.exr, residual.exr, metrics.json%s%s%s%s\n",
+      o.output_dir.c_str(), result.material_estimated ? ", material.json" : "",
+      errors ? ", error.png" : "", ambiguity.pixels.empty() ? "" : ", ambiguity.exr",
+      surface ? ", height.exr, mesh.ply, height.png, integrate.json" : "");
 }
 
 struct EvalOptions {
@@ -270,6 +304,8 @@ void AddNormalsCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--fast", o->fast,
                 "Fit normals to the luminance instead of all three channels (about 2x faster)");
+  cmd->add_flag("--integrate", o->integrate,
+                "Also integrate the normals: height.exr, mesh.ply (albedo colours), height.png");
   cmd->add_option("--threads", o->threads, "Threads (0 = all cores)")
       ->check(CLI::NonNegativeNumber);
   cmd->callback([o] { RunNormals(*o); });

@@ -10,12 +10,14 @@ void AddDemoCommand(CLI::App& app);
 void AddMaterialsCommand(CLI::App& app);
 void AddRenderCommand(CLI::App& app);
 void AddNormalsCommand(CLI::App& app);  // normals and eval
+void AddIntegrateCommand(CLI::App& app);
 
 // Every subcommand, in the order `iphong --help` lists them. New commands are added here only.
 inline void AddAllCommands(CLI::App& app) {
   AddDemoCommand(app);
   AddRenderCommand(app);
   AddNormalsCommand(app);
+  AddIntegrateCommand(app);
   AddMaterialsCommand(app);
 }
 

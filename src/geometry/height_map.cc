@@ -33,6 +33,7 @@ TriangleMesh MeshFromHeightMap(const ImageF& height, const Mask& mask, const Hei
       if (!Valid(height, mask, c, r)) continue;
       vertex[static_cast<std::size_t>(r) * w + c] = static_cast<int>(mesh.positions.size());
       mesh.positions.push_back(HeightMapPoint(frame, w, h, c, r, *height.at(c, r)));
+      mesh.uvs.emplace_back((c + 0.5) / w, (r + 0.5) / h);
       if (vertex_pixel) vertex_pixel->push_back(r * w + c);
     }
   }

@@ -33,8 +33,9 @@ struct HeightMeshOptions {
 };
 
 // One vertex per masked pixel with a finite value, two triangles per 2×2 block of them (one when
-// only three are inside), counter-clockwise seen from the viewer. `vertex_pixel` (optional)
-// receives the pixel index (row·W + col) of each vertex.
+// only three are inside), counter-clockwise seen from the viewer. The uvs address the image
+// (u = (col + 0.5)/W, v = (row + 0.5)/H, v = 0 at the top), for albedo textures. `vertex_pixel`
+// (optional) receives the pixel index (row·W + col) of each vertex.
 TriangleMesh MeshFromHeightMap(const ImageF& height, const Mask& mask, const HeightMapFrame& frame,
                                const HeightMeshOptions& options = {},
                                std::vector<int>* vertex_pixel = nullptr);

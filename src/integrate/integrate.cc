@@ -66,7 +66,9 @@ std::string IntegrateOptions::Validate() const {
 
 namespace {
 
-void CheckInputs(const ImageF& normals, const Mask& mask) {
+// Returns the number of back-facing normals (an error unless allowed).
+std::size_t CheckInputs(const ImageF& normals, const Mask& mask, bool allow_back_facing) {
+  std::size_t back_facing = 0;
   if (normals.channels != 3) throw std::invalid_argument("the normal map must have 3 channels");
   if (normals.width != mask.width || normals.height != mask.height) {
     throw std::invalid_argument("mask is " + std::to_string(mask.width) + "x" +
@@ -90,11 +92,16 @@ void CheckInputs(const ImageF& normals, const Mask& mask) {
                                     " is not unit (0 outside the mask only)");
       }
       if (!(n[2] > 0)) {
+        ++back_facing;
+        if (allow_back_facing) continue;
         throw std::invalid_argument(
-            "normal faces away from the camera (nz = " + std::to_string(n[2]) + ")" + where());
+            "normal faces away from the camera (nz = " + std::to_string(n[2]) + ")" + where() +
+            "; allow back-facing normals (allow_back_facing, --allow-back-facing) to "
+            "treat them as grazing");
       }
     }
   }
+  return back_facing;
 }
 
 }  // namespace
@@ -153,7 +160,7 @@ IntegrateResult IntegrateNormals(const ImageF& normals_cam, const Mask& mask,
                                  const IntegrateOptions& options) {
   const auto start = Clock::now();
   if (auto m = options.Validate(); !m.empty()) throw std::invalid_argument(m);
-  CheckInputs(normals_cam, mask);
+  const std::size_t back_facing = CheckInputs(normals_cam, mask, options.allow_back_facing);
   const bool has_prior = options.depth_prior.channels == 1;
   if (has_prior &&
       (options.depth_prior.width != mask.width || options.depth_prior.height != mask.height)) {
@@ -163,6 +170,7 @@ IntegrateResult IntegrateNormals(const ImageF& normals_cam, const Mask& mask,
   IntegrateResult result;
   IntegrateSummary& s = result.summary;
   s.pixels = mask.count();
+  s.back_facing_pixels = back_facing;
   Method method = options.method;
   if (method == Method::kAuto) {
     const bool full = s.pixels == mask.inside.size();

@@ -52,7 +52,10 @@ struct IntegrateOptions {
   // kQuadratic otherwise.
   Method method = Method::kAuto;
   LinearSolver solver = LinearSolver::kAuto;
-  double min_cos = 0.05;     // grazing guard (see above)
+  double min_cos = 0.05;  // grazing guard (see above)
+  // Normals facing away from the camera (nz ≤ 0, found at silhouettes of real normal maps, e.g.
+  // DiLiGenT's ground truth) are an error unless allowed; allowed, they count as grazing.
+  bool allow_back_facing = false;
   double pixel_size = 1.0;   // orthographic: scene units per pixel
   bool perspective = false;  // integrate log depth with `intrinsics`
   Intrinsics intrinsics;
@@ -80,10 +83,11 @@ struct IntegrateSummary {
   Method method = Method::kQuadratic;  // the one that ran
   std::string solver;                  // "dct", "fft", "cholesky", "conjugate-gradient"
   std::size_t pixels = 0;
-  int components = 0;        // connected parts of the mask
-  int rounds = 1;            // reweighting rounds (kBilateral)
-  long long iterations = 0;  // linear solver iterations (conjugate gradient), summed
-  double setup_seconds = 0;  // gradients and assembly
+  int components = 0;                  // connected parts of the mask
+  std::size_t back_facing_pixels = 0;  // nz ≤ 0, treated as grazing (allow_back_facing)
+  int rounds = 1;                      // reweighting rounds (kBilateral)
+  long long iterations = 0;            // linear solver iterations (conjugate gradient), summed
+  double setup_seconds = 0;            // gradients and assembly
   double solve_seconds = 0;
   double total_seconds = 0;
   double rms_residual = 0;       // of the edge equations, slope units

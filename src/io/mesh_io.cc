@@ -1,5 +1,7 @@
 #include "io/mesh_io.h"
 
+#include "io/image_io.h"
+
 #include "io/staging.h"
 
 // OpenMesh's IO header must come before the mesh kernel.
@@ -109,7 +111,7 @@ void SaveMesh(const std::string& path, const geometry::TriangleMesh& mesh,
     if (vertex_colors) {
       const Vec3f& c = (*vertex_colors)[v];
       auto byte = [](float x) {
-        return static_cast<unsigned char>(std::lround(std::clamp(x, 0.0f, 1.0f) * 255));
+        return static_cast<unsigned char>(std::lround(LinearToSrgb(x) * 255));
       };
       om.set_color(handles[v], {byte(c[0]), byte(c[1]), byte(c[2])});
     }

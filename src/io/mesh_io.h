@@ -20,7 +20,8 @@ struct MeshLoadOptions {
 geometry::TriangleMesh LoadMesh(const std::string& path, const MeshLoadOptions& options = {});
 
 // Writes per-vertex normals (the average of each vertex's corner normals) and, when given, one
-// 8-bit colour per vertex (linear [0, 1] values, clamped). PLY is written binary. Atomic.
+// 8-bit colour per vertex (linear [0, 1] values, clamped and sRGB-encoded as viewers expect).
+// PLY is written binary. Atomic.
 void SaveMesh(const std::string& path, const geometry::TriangleMesh& mesh,
               const std::vector<Vec3f>* vertex_colors = nullptr);
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <stdexcept>
 
 #include "io/image_io.h"
 
@@ -20,6 +21,23 @@ ImageF NormalMapPicture(const ImageF& normals, const Mask& mask, bool directx) {
     }
   }
   return picture;
+}
+
+ImageF NormalsFromPicture(const ImageF& picture, bool directx, Mask* mask) {
+  if (picture.channels < 3) throw std::invalid_argument("a normal-map picture needs 3 channels");
+  ImageF normals(picture.width, picture.height, 3);
+  *mask = Mask(picture.width, picture.height, false);
+  for (std::size_t p = 0; p < picture.pixel_count(); ++p) {
+    const float* v = picture.pixels.data() + p * picture.channels;
+    if (v[0] == 0 && v[1] == 0 && v[2] == 0) continue;
+    Vec3f n(2 * v[0] - 1, 2 * v[1] - 1, 2 * v[2] - 1);
+    if (directx) n.y() = -n.y();
+    if (!(n.norm() > 0.1f)) continue;
+    n.normalize();
+    std::copy(n.data(), n.data() + 3, normals.pixels.data() + 3 * p);
+    mask->inside[p] = 1;
+  }
+  return normals;
 }
 
 void WriteErrorMap(const std::string& path, const ImageF& error_deg, const Mask& mask,

@@ -11,6 +11,10 @@ namespace iphong::io {
 // (green = −y, as DirectX tangent-space maps expect).
 ImageF NormalMapPicture(const ImageF& normals, const Mask& mask, bool directx = false);
 
+// The inverse, for normal maps stored as pictures: unit vectors from 2v − 1 (renormalized);
+// black pixels (the outside of NormalMapPicture's mask) are left out of `mask` and set to 0.
+ImageF NormalsFromPicture(const ImageF& picture, bool directx, Mask* mask);
+
 // Angular error (degrees, 1 channel) as a colour map from 0 to `max_deg` with a labelled scale
 // bar on the right; black outside the mask. Written as an 8-bit PNG (atomically).
 void WriteErrorMap(const std::string& path, const ImageF& error_deg, const Mask& mask,

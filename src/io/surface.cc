@@ -1,0 +1,118 @@
+#include "io/surface.h"
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "io/image_io.h"
+#include "io/mesh_io.h"
+#include "io/text_file.h"
+#include "render/preview.h"
+#include "solve/metrics.h"
+
+namespace iphong::io {
+
+geometry::HeightMapFrame FrameOf(const integrate::IntegrateOptions& options) {
+  geometry::HeightMapFrame frame;
+  frame.pixel_size = options.pixel_size;
+  frame.perspective = options.perspective;
+  frame.fx = options.intrinsics.fx, frame.fy = options.intrinsics.fy;
+  frame.cx = options.intrinsics.cx, frame.cy = options.intrinsics.cy;
+  return frame;
+}
+
+SurfaceFiles WriteSurfaceFiles(const StagingDirectory& out,
+                               const integrate::IntegrateResult& result, const ImageF& normals,
+                               const Mask& mask, const geometry::HeightMapFrame& frame,
+                               const SurfaceFileOptions& options) {
+  SurfaceFiles files;
+  WriteImage(out.file("height.exr"), result.height);
+  files.names.push_back("height.exr");
+
+  geometry::HeightMeshOptions mesh_options;
+  mesh_options.normals = &normals;
+  mesh_options.continuity = &result.continuity;
+  std::vector<int> vertex_pixel;
+  const geometry::TriangleMesh mesh =
+      geometry::MeshFromHeightMap(result.height, mask, frame, mesh_options, &vertex_pixel);
+  files.vertices = mesh.positions.size();
+  files.triangles = mesh.triangles.size();
+  std::vector<Vec3f> colors;
+  if (options.albedo) {
+    // Albedo scales are arbitrary (light intensities): the 99th percentile maps to 0.9.
+    std::vector<float> peaks;
+    for (int p : vertex_pixel) {
+      const float* a = options.albedo->at(p % options.albedo->width, p / options.albedo->width);
+      peaks.push_back(std::max({a[0], a[1], a[2]}));
+    }
+    float scale = 1;
+    if (!peaks.empty()) {
+      const std::size_t k = static_cast<std::size_t>(0.99 * (peaks.size() - 1));
+      std::nth_element(peaks.begin(), peaks.begin() + k, peaks.end());
+      if (peaks[k] > 0) scale = 0.9f / peaks[k];
+    }
+    for (int p : vertex_pixel) {
+      const float* a = options.albedo->at(p % options.albedo->width, p / options.albedo->width);
+      colors.emplace_back(scale * a[0], scale * a[1], scale * a[2]);
+    }
+  }
+  SaveMesh(out.file("mesh.ply"), mesh, options.albedo ? &colors : nullptr);
+  files.names.push_back("mesh.ply");
+  if (options.obj) {
+    SaveMesh(out.file("mesh.obj"), mesh);
+    files.names.push_back("mesh.obj");
+  }
+  if (!mesh.triangles.empty()) {
+    render::PreviewOptions preview;
+    preview.width = options.preview_width;
+    preview.texture = options.albedo;
+    preview.threads = options.threads;
+    WriteImage(out.file("height.png"), render::RenderPreview(mesh, preview));
+    files.names.push_back("height.png");
+  }
+
+  const ImageF back = geometry::NormalsFromHeightMap(result.height, mask, frame);
+  Mask compared = mask;
+  for (std::size_t p = 0; p < compared.inside.size(); ++p) {
+    if (back.pixels[3 * p + 2] == 0 && back.pixels[3 * p] == 0) compared.inside[p] = 0;
+  }
+  if (compared.count() > 0) {
+    const solve::AngularErrorMetrics m = solve::CompareNormals(back, normals, compared);
+    files.consistency_mean_deg = m.mean_deg;
+    files.consistency_median_deg = m.median_deg;
+  }
+
+  const integrate::IntegrateSummary& s = result.summary;
+  double lo = INFINITY, hi = -INFINITY;
+  for (float v : result.height.pixels) {
+    if (std::isfinite(v)) lo = std::min<double>(lo, v), hi = std::max<double>(hi, v);
+  }
+  nlohmann::json report = {
+      {"method", integrate::MethodName(s.method)},
+      {"solver", s.solver},
+      {"pixels", s.pixels},
+      {"components", s.components},
+      {"rounds", s.rounds},
+      {"iterations", s.iterations},
+      {"setup_seconds", s.setup_seconds},
+      {"solve_seconds", s.solve_seconds},
+      {"total_seconds", s.total_seconds},
+      {"memory_bytes", s.memory_bytes},
+      {"rms_residual", s.rms_residual},
+      {"camera", frame.perspective ? "perspective" : "orthographic"},
+      {"height_unit", frame.perspective ? "depth along the optical axis"
+                                        : "pixels x pixel_size, toward the viewer"},
+      {"pixel_size", frame.pixel_size},
+      {"height_min", lo},
+      {"height_max", hi},
+      {"outside_mask", "NaN"},
+      {"mesh_vertices", files.vertices},
+      {"mesh_triangles", files.triangles},
+      {"consistency_mean_deg", files.consistency_mean_deg},
+      {"consistency_median_deg", files.consistency_median_deg}};
+  WriteTextFile(out.file("integrate.json"), report.dump(2) + "\n");
+  files.names.push_back("integrate.json");
+  return files;
+}
+
+}  // namespace iphong::io

@@ -1,0 +1,40 @@
+// Writing an integrated surface: the height map, its mesh and a picture of it.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "geometry/height_map.h"
+#include "integrate/integrate.h"
+#include "io/staging.h"
+
+namespace iphong::io {
+
+struct SurfaceFileOptions {
+  const ImageF* albedo = nullptr;  // vertex colours of the mesh and the preview's colours
+  bool obj = false;                // also mesh.obj
+  int preview_width = 640;
+  int threads = 0;
+};
+
+struct SurfaceFiles {
+  std::vector<std::string> names;  // written, in order
+  std::size_t vertices = 0, triangles = 0;
+  // Mean and median angle between the input normals and the height map's own (re-differentiated).
+  double consistency_mean_deg = 0, consistency_median_deg = 0;
+};
+
+// Writes into `out`: height.exr (float32, 1 channel, NaN outside the mask: height toward the
+// viewer, or depth for a perspective camera), mesh.ply (binary: the masked pixels triangulated,
+// per-vertex normals from `normals`, colours from the albedo when given; edges the integration
+// cut are not bridged), mesh.obj on request, height.png (the mesh rendered at an oblique view)
+// and integrate.json (method, solver, timings, residual, consistency).
+SurfaceFiles WriteSurfaceFiles(const StagingDirectory& out,
+                               const integrate::IntegrateResult& result, const ImageF& normals,
+                               const Mask& mask, const geometry::HeightMapFrame& frame,
+                               const SurfaceFileOptions& options);
+
+// The frame a result was integrated in.
+geometry::HeightMapFrame FrameOf(const integrate::IntegrateOptions& options);
+
+}  // namespace iphong::io
