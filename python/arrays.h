@@ -4,6 +4,8 @@
 #include <pybind11/numpy.h>
 
 #include <cstring>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "core/types.h"
@@ -48,6 +50,29 @@ inline py::array_t<float> Stack(const std::vector<ImageF>& images) {
     out += image.pixels.size();
   }
   return array;
+}
+
+// From numpy: a (H, W) boolean mask (None = everything) and a (H, W, 3) float image.
+inline Mask ToMask(const py::object& value, int width, int height) {
+  if (value.is_none()) return Mask(width, height, true);
+  auto a = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(value);
+  if (!a || a.ndim() != 2 || a.shape(0) != height || a.shape(1) != width) {
+    throw std::invalid_argument("mask must have shape (H, W) = (" + std::to_string(height) + ", " +
+                                std::to_string(width) + ")");
+  }
+  Mask mask(width, height, false);
+  for (std::size_t p = 0; p < mask.inside.size(); ++p) mask.inside[p] = a.data()[p];
+  return mask;
+}
+
+inline ImageF ToImage(const py::object& value, const char* what) {
+  auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
+  if (!a || a.ndim() != 3 || a.shape(2) != 3) {
+    throw std::invalid_argument(std::string(what) + " must have shape (H, W, 3)");
+  }
+  ImageF image(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)), 3);
+  std::memcpy(image.pixels.data(), a.data(), image.pixels.size() * sizeof(float));
+  return image;
 }
 
 }  // namespace iphong::python

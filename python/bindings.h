@@ -8,5 +8,6 @@ namespace iphong::python {
 void BindReflectance(pybind11::module_& m);
 void BindRender(pybind11::module_& m);
 void BindSolve(pybind11::module_& m);
+void BindIntegrate(pybind11::module_& m);
 
 }  // namespace iphong::python

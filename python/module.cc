@@ -7,4 +7,5 @@ PYBIND11_MODULE(_core, m) {
   iphong::python::BindReflectance(m);
   iphong::python::BindRender(m);
   iphong::python::BindSolve(m);
+  iphong::python::BindIntegrate(m);
 }

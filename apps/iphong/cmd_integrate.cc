@@ -64,8 +64,8 @@ NormalInput ReadNormalInput(const IntegrateCommandOptions& o) {
     if (image.channels < 3) throw std::runtime_error(o.normals + ": a normal map needs 3 channels");
     const std::string ext = path.extension().string();
     if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") {
-      // Pictures store (n + 1)/2; read linearly (ReadImage linearizes 8-bit sRGB, which a normal
-      // picture is not: 16-bit PNGs are written linear by `iphong normals`).
+      // Pictures store (n + 1)/2 (ReadImage undoes no transfer curve, as a normal picture has
+      // none).
       in.normals = io::NormalsFromPicture(image, o.convention == "directx", &in.mask);
     } else {
       if (image.channels != 3) {

@@ -15,8 +15,11 @@ from ._core import (  # noqa: F401
     __version__,
     angular_error,
     estimate_normals,
+    height_to_mesh,
+    integrate,
     material,
     material_presets,
+    normals_from_height,
     shade,
 )
 
@@ -59,10 +62,13 @@ __all__ = [
     "PointLight",
     "angular_error",
     "estimate_normals",
+    "height_to_mesh",
+    "integrate",
     "load_dataset",
     "material",
     "material_presets",
     "materials",
+    "normals_from_height",
     "render",
     "shade",
 ]

@@ -1,0 +1,178 @@
+// Python view of src/integrate and the height-map surfaces of src/geometry.
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+
+#include "arrays.h"
+#include "bindings.h"
+#include "geometry/height_map.h"
+#include "integrate/integrate.h"
+
+namespace py = pybind11;
+
+namespace iphong::python {
+namespace {
+
+ImageF ToScalarImage(const py::object& value, int width, int height, const char* what) {
+  auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
+  if (!a || a.ndim() != 2 || a.shape(0) != height || a.shape(1) != width) {
+    throw std::invalid_argument(std::string(what) + " must have shape (H, W) = (" +
+                                std::to_string(height) + ", " + std::to_string(width) + ")");
+  }
+  ImageF image(width, height, 1);
+  std::memcpy(image.pixels.data(), a.data(), image.pixels.size() * sizeof(float));
+  return image;
+}
+
+integrate::LinearSolver ParseSolver(const std::string& name) {
+  if (name == "auto") return integrate::LinearSolver::kAuto;
+  if (name == "cg") return integrate::LinearSolver::kConjugateGradient;
+  if (name == "cholesky") return integrate::LinearSolver::kCholesky;
+  throw std::invalid_argument("unknown solver '" + name + "' (auto, cg, cholesky)");
+}
+
+geometry::HeightMapFrame Frame(double pixel_size, const py::object& intrinsics) {
+  geometry::HeightMapFrame frame;
+  frame.pixel_size = pixel_size;
+  if (!intrinsics.is_none()) {
+    const auto k = intrinsics.cast<std::vector<double>>();
+    if (k.size() != 4) throw std::invalid_argument("intrinsics must be (fx, fy, cx, cy)");
+    frame.perspective = true;
+    frame.fx = k[0], frame.fy = k[1], frame.cx = k[2], frame.cy = k[3];
+  }
+  return frame;
+}
+
+// The pixels with a normal when no mask is given (maps store 0 outside the object).
+Mask MaskOrNonZero(const py::object& mask_in, const ImageF& normals) {
+  if (!mask_in.is_none()) return ToMask(mask_in, normals.width, normals.height);
+  Mask mask(normals.width, normals.height, false);
+  for (std::size_t p = 0; p < mask.inside.size(); ++p) {
+    const float* n = normals.pixels.data() + 3 * p;
+    mask.inside[p] = n[0] != 0 || n[1] != 0 || n[2] != 0;
+  }
+  return mask;
+}
+
+}  // namespace
+
+void BindIntegrate(py::module_& m) {
+  m.def(
+      "integrate",
+      [](const py::object& normals_in, const py::object& mask_in, const std::string& method,
+         const std::string& solver, double pixel_size, const py::object& intrinsics,
+         const py::object& depth_prior, double prior_weight, double min_cos, bool allow_back_facing,
+         double stiffness, int threads) {
+        const ImageF normals = ToImage(normals_in, "normals");
+        const Mask mask = MaskOrNonZero(mask_in, normals);
+        integrate::IntegrateOptions o;
+        o.method = integrate::ParseMethod(method);
+        o.solver = ParseSolver(solver);
+        const geometry::HeightMapFrame frame = Frame(pixel_size, intrinsics);
+        o.pixel_size = pixel_size;
+        o.perspective = frame.perspective;
+        o.intrinsics = {frame.fx, frame.fy, frame.cx, frame.cy};
+        if (!depth_prior.is_none()) {
+          o.depth_prior = ToScalarImage(depth_prior, normals.width, normals.height, "depth_prior");
+        }
+        o.prior_weight = prior_weight;
+        o.min_cos = min_cos;
+        o.allow_back_facing = allow_back_facing;
+        o.stiffness = stiffness;
+        o.threads = threads;
+        integrate::IntegrateResult r;
+        {
+          py::gil_scoped_release release;
+          r = integrate::IntegrateNormals(normals, mask, o);
+        }
+        const integrate::IntegrateSummary& s = r.summary;
+        py::dict summary;
+        summary["method"] = integrate::MethodName(s.method);
+        summary["solver"] = s.solver;
+        summary["pixels"] = s.pixels;
+        summary["components"] = s.components;
+        summary["back_facing_pixels"] = s.back_facing_pixels;
+        summary["rounds"] = s.rounds;
+        summary["iterations"] = s.iterations;
+        summary["setup_seconds"] = s.setup_seconds;
+        summary["solve_seconds"] = s.solve_seconds;
+        summary["total_seconds"] = s.total_seconds;
+        summary["rms_residual"] = s.rms_residual;
+        summary["memory_bytes"] = s.memory_bytes;
+        py::dict out;
+        out["height"] = ToArray(r.height);
+        out["continuity"] = ToArray(r.continuity);
+        out["mask"] = ToArray(mask);
+        out["summary"] = summary;
+        return out;
+      },
+      py::arg("normals"), py::arg("mask") = py::none(), py::arg("method") = "auto",
+      py::arg("solver") = "auto", py::arg("pixel_size") = 1.0, py::arg("intrinsics") = py::none(),
+      py::arg("depth_prior") = py::none(), py::arg("prior_weight") = 1e-2,
+      py::arg("min_cos") = 0.05, py::arg("allow_back_facing") = false, py::arg("stiffness") = 2.0,
+      py::arg("threads") = 0,
+      R"(Heights from a normal map (H, W, 3) in the camera frame (x right, y up, z toward the viewer).
+
+method: auto (dct on a full rectangle, else quadratic), quadratic (masked least squares), dct,
+fft (Frankot-Chellappa), bilateral (keeps depth discontinuities). mask: (H, W) bool, default the
+pixels with a non-zero normal. intrinsics (fx, fy, cx, cy) integrate log depth for a perspective
+camera. depth_prior (H, W): known heights or depths, NaN where unknown.
+Returns a dict: height (H, W) float32, NaN outside the mask (height toward the viewer in pixels x
+pixel_size, or depth for a perspective camera), continuity (H, W, 2) edge weights to the right and
+below (0 = cut), mask, and summary (method, solver, timings, iterations, rms_residual...).
+Raises ValueError on bad input (size mismatch, empty mask, NaN, non-unit or back-facing normals).)");
+
+  m.def(
+      "height_to_mesh",
+      [](const py::object& height_in, const py::object& mask_in, const py::object& normals_in,
+         double pixel_size, const py::object& intrinsics) {
+        auto h = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(height_in);
+        if (!h || h.ndim() != 2) throw std::invalid_argument("height must have shape (H, W)");
+        const int height = static_cast<int>(h.shape(0)), width = static_cast<int>(h.shape(1));
+        const ImageF map = ToScalarImage(height_in, width, height, "height");
+        const Mask mask = ToMask(mask_in, width, height);
+        ImageF normals;
+        geometry::HeightMeshOptions options;
+        if (!normals_in.is_none()) {
+          normals = ToImage(normals_in, "normals");
+          if (normals.width != width || normals.height != height) {
+            throw std::invalid_argument("normals must have the height map's size");
+          }
+          options.normals = &normals;
+        }
+        const geometry::TriangleMesh mesh =
+            geometry::MeshFromHeightMap(map, mask, Frame(pixel_size, intrinsics), options);
+        py::array_t<double> vertices(
+            {static_cast<py::ssize_t>(mesh.positions.size()), py::ssize_t{3}});
+        py::array_t<int> triangles(
+            {static_cast<py::ssize_t>(mesh.triangles.size()), py::ssize_t{3}});
+        for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+          for (int c = 0; c < 3; ++c) vertices.mutable_at(v, c) = mesh.positions[v][c];
+        for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+          for (int c = 0; c < 3; ++c) triangles.mutable_at(t, c) = mesh.triangles[t][c];
+        return py::make_tuple(vertices, triangles);
+      },
+      py::arg("height"), py::arg("mask") = py::none(), py::arg("normals") = py::none(),
+      py::arg("pixel_size") = 1.0, py::arg("intrinsics") = py::none(),
+      "Triangulate a height (or depth) map over its mask: (vertices (N, 3), triangles (M, 3)) in "
+      "the camera frame, counter-clockwise seen from the viewer.");
+
+  m.def(
+      "normals_from_height",
+      [](const py::object& height_in, const py::object& mask_in, double pixel_size,
+         const py::object& intrinsics) {
+        auto h = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(height_in);
+        if (!h || h.ndim() != 2) throw std::invalid_argument("height must have shape (H, W)");
+        const int height = static_cast<int>(h.shape(0)), width = static_cast<int>(h.shape(1));
+        const ImageF map = ToScalarImage(height_in, width, height, "height");
+        return ToArray(geometry::NormalsFromHeightMap(map, ToMask(mask_in, width, height),
+                                                      Frame(pixel_size, intrinsics)));
+      },
+      py::arg("height"), py::arg("mask") = py::none(), py::arg("pixel_size") = 1.0,
+      py::arg("intrinsics") = py::none(),
+      "Unit normals (H, W, 3) of a height (or depth) map's surface by central differences; 0 "
+      "where undefined.");
+}
+
+}  // namespace iphong::python
