@@ -37,6 +37,8 @@
 namespace iphong::integrate {
 
 enum class Method { kAuto, kQuadratic, kDct, kFft, kBilateral };
+// For the sparse methods. kAuto = kConjugateGradient: CG preconditioned by an aggregation
+// multigrid V-cycle (integrate/multigrid.h); kCholesky: CHOLMOD's (else Eigen's) factorization.
 enum class LinearSolver { kAuto, kConjugateGradient, kCholesky };
 
 // "auto", "quadratic", "dct", "fft", "bilateral"; throws std::invalid_argument otherwise.

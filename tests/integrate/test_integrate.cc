@@ -196,6 +196,29 @@ TEST(Integrate, SeparatePartsEachGetZeroMean) {
   EXPECT_NEAR(right, 0, 1e-6 * s.mask.count());
 }
 
+TEST(Integrate, IsolatedPixelsAndThinLinesAreWellDefined) {
+  // A checkerboard of single pixels (every one its own part) beside a one-pixel-wide line.
+  const Synthetic s = MakeSynthetic(40, 30, BumpAndRipples(), [](double x, double y) {
+    const int c = static_cast<int>(std::floor(x)), r = static_cast<int>(std::floor(y));
+    return (x < 0 && (c + r) % 2 == 0) || (x > 5 && r == 3);
+  });
+  for (LinearSolver solver : {LinearSolver::kConjugateGradient, LinearSolver::kCholesky}) {
+    IntegrateOptions options;
+    options.solver = solver;
+    const IntegrateResult result = IntegrateNormals(s.normals, s.mask, options);
+    int alone = 0;
+    for (std::size_t p = 0; p < s.mask.inside.size(); ++p) {
+      if (!s.mask.inside[p]) continue;
+      ASSERT_TRUE(std::isfinite(result.height.pixels[p]));
+      if (p % 40 < 20) {
+        EXPECT_EQ(result.height.pixels[p], 0.0f);  // alone: its own mean
+        ++alone;
+      }
+    }
+    EXPECT_EQ(result.summary.components, alone + 1);
+  }
+}
+
 // A ball resting above a floor: at its silhouette the depth jumps by 15 pixels.
 TEST(Integrate, BilateralKeepsADepthStepTheQuadraticSmears) {
   const double radius = 40, lift = 15;
