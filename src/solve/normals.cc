@@ -550,13 +550,15 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
       fit = FitSpecular(data, sample, solutions, options, fit);
       NormalOptions with_ambient = options;
       with_ambient.ambient_term = fit.ambient;
-      PixelFitter fitter(data, with_ambient, fit.ks, fit.shininess);
       // Only the sample's normals feed the next global fit; the rest are fitted once at the end.
-      for (std::size_t p : sample) {
-        PixelSolution refined = solutions[p];
-        fitter.FitWithRestart(p, refined);
-        solutions[p].normal = refined.normal;
-      }
+      ParallelFor(0, sample.size(), 64, options.threads, [&](std::size_t b, std::size_t e) {
+        PixelFitter fitter(data, with_ambient, fit.ks, fit.shininess);
+        for (std::size_t i = b; i < e; ++i) {
+          PixelSolution refined = solutions[sample[i]];
+          fitter.FitWithRestart(sample[i], refined);
+          solutions[sample[i]].normal = refined.normal;
+        }
+      });
     }
     const double gain =
         fit.cost_without_specular > 0 ? 1 - fit.cost / fit.cost_without_specular : 0;
