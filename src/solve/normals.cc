@@ -449,7 +449,7 @@ SpecularFit FitSpecular(const PhotometricData& data, const std::vector<std::size
   problem.SetParameterLowerBound(&log_n, 0, std::log(1.0));
   problem.SetParameterUpperBound(&log_n, 0, std::log(1000.0));
   ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::DENSE_QR;
+  solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
   solver_options.max_num_iterations = 50;
   solver_options.num_threads = ResolveThreads(o.threads);
   ceres::Solver::Summary summary;
