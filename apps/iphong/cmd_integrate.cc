@@ -1,4 +1,6 @@
 // `iphong integrate NORMALS -o DIR`: heights and a mesh from a normal map.
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
@@ -122,9 +124,16 @@ void RunIntegrate(IntegrateCommandOptions& o) {
       throw std::runtime_error(o.depth_prior + ": the depth prior must have one channel");
     }
   }
+  const bool tty = ::isatty(2);
+  if (tty) {
+    options.progress = [](double fraction) {
+      std::fprintf(stderr, "\rintegrating: %3.0f%%", 100 * fraction);
+    };
+  }
   integrate::IntegrateResult result;
   try {
     result = integrate::IntegrateNormals(in.normals, in.mask, options);
+    if (tty) std::fprintf(stderr, "\r%20s\r", "");
   } catch (const std::invalid_argument& e) {
     const std::string source = o.mask.empty() ? o.normals : o.normals + " with mask " + o.mask;
     throw std::runtime_error(source + ": " + e.what());

@@ -29,6 +29,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -75,6 +76,8 @@ struct IntegrateOptions {
   double cg_tolerance = 1e-6;  // relative residual norm
   int cg_max_iterations = 5000;
   int threads = 0;
+  // Called with the fraction done (0..1) from the calling thread, for long runs' progress.
+  std::function<void(double)> progress;
 
   std::string Validate() const;
 };

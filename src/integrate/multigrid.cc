@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 #include "core/parallel.h"
 
@@ -185,7 +186,8 @@ void GridMultigrid::Apply(const Eigen::VectorXd& r, Eigen::VectorXd* z) const {
 }
 
 int SolvePcg(const RowMatrix& a, const GridMultigrid& preconditioner, const Eigen::VectorXd& b,
-             double tolerance, int max_iterations, int threads, Eigen::VectorXd* x) {
+             double tolerance, int max_iterations, int threads, Eigen::VectorXd* x,
+             const std::function<void(double)>& progress) {
   const double b_norm = b.norm();
   if (b_norm == 0) {
     x->setZero(b.size());
@@ -208,6 +210,9 @@ int SolvePcg(const RowMatrix& a, const GridMultigrid& preconditioner, const Eige
     p = z + (rz_next / rz) * p;
     rz = rz_next;
     ++iteration;
+    if (progress) {
+      progress(std::clamp(std::log(r.norm() / b_norm) / std::log(tolerance), 0.0, 1.0));
+    }
   }
   return iteration;
 }

@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -35,7 +36,9 @@ class GridMultigrid {
 
 // Solves A x = b from the starting point in `x` to ‖b − Ax‖ ≤ tolerance·‖b‖; returns the
 // iterations. SpMV runs on `threads`.
+// `progress`, when set, gets log(‖r‖/‖b‖)/log(tolerance) after each iteration.
 int SolvePcg(const RowMatrix& a, const GridMultigrid& preconditioner, const Eigen::VectorXd& b,
-             double tolerance, int max_iterations, int threads, Eigen::VectorXd* x);
+             double tolerance, int max_iterations, int threads, Eigen::VectorXd* x,
+             const std::function<void(double)>& progress = {});
 
 }  // namespace iphong::integrate::internal

@@ -201,14 +201,14 @@ class LinearSystem {
   // Assembles and solves, starting the iterative solver from `x`; returns CG iterations.
   long long Solve(const Edges& e, const std::vector<double>& anchor_weight,
                   const std::vector<double>& anchor_value, Eigen::VectorXd* x,
-                  std::size_t* memory_bytes) {
+                  std::size_t* memory_bytes, const std::function<void(double)>& progress) {
     Eigen::VectorXd rhs;
     if (kind_ == LinearSolver::kConjugateGradient) {
       RowMatrix matrix;
       Assemble(grid_, e, anchor_weight, anchor_value, &matrix, &rhs);
       const GridMultigrid multigrid(matrix, grid_.col, grid_.row);
       const int iterations = SolvePcg(matrix, multigrid, rhs, options_.cg_tolerance,
-                                      options_.cg_max_iterations, options_.threads, x);
+                                      options_.cg_max_iterations, options_.threads, x, progress);
       *memory_bytes =
           std::max(*memory_bytes, multigrid.memory_bytes() + 5 * rhs.size() * sizeof(double));
       return iterations;
@@ -289,7 +289,15 @@ SparseOutcome SolveMasked(const GridGradients& g, const Mask& mask,
   Edges edges;
   for (out.rounds = 1;; ++out.rounds) {
     edges = BuildEdges(grid, g, u);
-    out.iterations += system.Solve(edges, anchor_weight, anchor_value, &f, &out.memory_bytes);
+    // Progress: the rounds in equal shares (one share without reweighting).
+    std::function<void(double)> progress;
+    if (options.progress) {
+      progress = [&](double fraction) {
+        options.progress((out.rounds - 1 + fraction) / static_cast<double>(rounds));
+      };
+    }
+    out.iterations +=
+        system.Solve(edges, anchor_weight, anchor_value, &f, &out.memory_bytes, progress);
     if (out.rounds >= rounds) break;
 
     // Residuals of the one-sided equations and the energy they weigh.

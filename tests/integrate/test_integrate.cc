@@ -180,6 +180,25 @@ TEST(Integrate, CholeskyAndMultigridAgree) {
   }
 }
 
+TEST(Integrate, ReportsProgressUpToCompletion) {
+  const Synthetic s = MakeSynthetic(120, 100, BumpAndRipples(),
+                                    [](double x, double y) { return x * x + y * y < 45 * 45; });
+  for (Method method : {Method::kQuadratic, Method::kBilateral}) {
+    IntegrateOptions options;
+    options.method = method;
+    std::vector<double> seen;
+    options.progress = [&](double fraction) { seen.push_back(fraction); };
+    const IntegrateResult result = IntegrateNormals(s.normals, s.mask, options);
+    ASSERT_FALSE(seen.empty());
+    EXPECT_EQ(static_cast<long long>(seen.size()), result.summary.iterations);
+    for (double f : seen) {
+      EXPECT_GE(f, 0.0);
+      EXPECT_LE(f, 1.0);
+    }
+    if (method == Method::kQuadratic) EXPECT_DOUBLE_EQ(seen.back(), 1.0);  // converged
+  }
+}
+
 TEST(Integrate, SeparatePartsEachGetZeroMean) {
   const Synthetic s = MakeSynthetic(120, 60, BumpAndRipples(), [](double x, double y) {
     return std::hypot(x + 30, y) < 20 || std::hypot(x - 30, y) < 20;
