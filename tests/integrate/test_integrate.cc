@@ -195,7 +195,9 @@ TEST(Integrate, ReportsProgressUpToCompletion) {
       EXPECT_GE(f, 0.0);
       EXPECT_LE(f, 1.0);
     }
-    if (method == Method::kQuadratic) EXPECT_DOUBLE_EQ(seen.back(), 1.0);  // converged
+    if (method == Method::kQuadratic) {
+      EXPECT_DOUBLE_EQ(seen.back(), 1.0);  // converged
+    }
   }
 }
 
