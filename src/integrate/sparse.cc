@@ -61,8 +61,8 @@ struct Edges {
   std::vector<double> weight_right, target_right, weight_down, target_down;  // per mask index
 };
 
-// Forward weights u+ per pixel and direction (the backward weight is 1 − u+, or computed
-// alone at the end of a run); the quadratic problem has u = 1/2 everywhere.
+// Weights of the one-sided equations per pixel and direction: forward (to the right / below)
+// and backward. The quadratic problem has 1/2 everywhere; the bilateral one reweights them.
 struct OneSided {
   std::vector<double> forward_col, backward_col, forward_row, backward_row;
 };
@@ -70,6 +70,15 @@ struct OneSided {
 // A cut edge keeps this much weight, so no pixel is ever left without equations (its neighbours
 // carry it along instead of leaving its height undetermined).
 constexpr double kMinSum = 1e-4;
+
+// The forward equation of a and the backward one of its neighbour b (both say f_b − f_a = their
+// slope) merge into one edge equation: weight = their sum (times the view cosine), target = their
+// weighted mean slope.
+void MergeOneSided(double ua, double ub, double slope_a, double slope_b, double cos_edge,
+                   double* weight, double* target) {
+  *weight = cos_edge * std::max(ua + ub, kMinSum);
+  *target = ua + ub > 0 ? (ua * slope_a + ub * slope_b) / (ua + ub) : 0.5 * (slope_a + slope_b);
+}
 
 Edges BuildEdges(const Grid& grid, const GridGradients& g, const OneSided& u) {
   const std::size_t n = grid.size();
@@ -80,19 +89,14 @@ Edges BuildEdges(const Grid& grid, const GridGradients& g, const OneSided& u) {
     const int pa = grid.pixel[a];
     if (const int b = grid.right[a]; b >= 0) {
       const int pb = grid.pixel[b];
-      const double ua = u.forward_col[a], ub = u.backward_col[b], sum = std::max(ua + ub, kMinSum);
-      const double cos_edge = std::min(g.cos_view[pa], g.cos_view[pb]);
-      e.weight_right[a] = cos_edge * sum;
-      e.target_right[a] = ua + ub > 0 ? (ua * g.d_col[pa] + ub * g.d_col[pb]) / (ua + ub)
-                                      : 0.5 * (g.d_col[pa] + g.d_col[pb]);
+      MergeOneSided(u.forward_col[a], u.backward_col[b], g.d_col[pa], g.d_col[pb],
+                    std::min(g.cos_view[pa], g.cos_view[pb]), &e.weight_right[a],
+                    &e.target_right[a]);
     }
     if (const int b = grid.down[a]; b >= 0) {
       const int pb = grid.pixel[b];
-      const double ua = u.forward_row[a], ub = u.backward_row[b], sum = std::max(ua + ub, kMinSum);
-      const double cos_edge = std::min(g.cos_view[pa], g.cos_view[pb]);
-      e.weight_down[a] = cos_edge * sum;
-      e.target_down[a] = ua + ub > 0 ? (ua * g.d_row[pa] + ub * g.d_row[pb]) / (ua + ub)
-                                     : 0.5 * (g.d_row[pa] + g.d_row[pb]);
+      MergeOneSided(u.forward_row[a], u.backward_row[b], g.d_row[pa], g.d_row[pb],
+                    std::min(g.cos_view[pa], g.cos_view[pb]), &e.weight_down[a], &e.target_down[a]);
     }
   }
   return e;
