@@ -38,7 +38,7 @@ void BindSolve(py::module_& m) {
       [](const py::object& images_in, const py::object& light_directions,
          const py::object& light_intensities, const py::object& mask_in, const std::string& model,
          const py::object& material, double discard_dark, double discard_bright, bool fast,
-         int threads) {
+         int specular_clusters, int threads) {
         FloatArray images = FloatArray::ensure(images_in);
         if (!images || images.ndim() != 4 || images.shape(3) != 3) {
           throw std::invalid_argument("images must have shape (K, H, W, 3)");
@@ -65,6 +65,7 @@ void BindSolve(py::module_& m) {
         options.discard_bright = discard_bright;
         options.threads = threads;
         options.color_residuals = !fast;
+        options.specular_clusters = specular_clusters;
         if (!material.is_none()) {
           const py::dict d = material.cast<py::dict>();
           auto rgb = [&](const char* key, const Vec3d& fallback) -> Vec3d {
@@ -131,6 +132,16 @@ void BindSolve(py::module_& m) {
         out["material_estimated"] = result.material_estimated;
         out["specular_identifiable"] = result.specular_identifiable;
         out["specular_note"] = result.specular_note;
+        py::list clusters;
+        for (const solve::SpecularCluster& c : result.clusters) {
+          clusters.append(
+              py::dict(py::arg("albedo") = c.albedo_center, py::arg("pixels") = c.pixels,
+                       py::arg("ks") = c.ks, py::arg("shininess") = c.shininess,
+                       py::arg("ambient_term") = c.ambient_term, py::arg("estimated") = c.estimated,
+                       py::arg("identifiable") = c.identifiable, py::arg("note") = c.note));
+        }
+        out["clusters"] = clusters;
+        if (!result.cluster_map.pixels.empty()) out["cluster_map"] = ToArray(result.cluster_map);
         out["summary"] =
             py::dict(py::arg("message") = result.summary.message,
                      py::arg("init_seconds") = result.summary.init_seconds,
@@ -145,13 +156,14 @@ void BindSolve(py::module_& m) {
       py::arg("images"), py::arg("light_directions"), py::arg("light_intensities") = py::none(),
       py::arg("mask") = py::none(), py::arg("model") = "phong", py::arg("material") = py::none(),
       py::arg("discard_dark") = 0.3, py::arg("discard_bright") = 0.1, py::arg("fast") = false,
-      py::arg("threads") = 0,
+      py::arg("specular_clusters") = 1, py::arg("threads") = 0,
       R"doc(Recover per-pixel normals and albedo (see `iphong normals`).
 
 images (K, H, W, 3) linear float; light_directions (K, 3) from the surface toward the light;
 light_intensities (K, 3) or None (ones); mask (H, W) bool or None; model "phong",
 "blinn-phong" or "lambert" (Woodham); material: dict with ka, ks, shininess, ambient (and model)
-when the coefficients are known, else they are estimated.
+when the coefficients are known, else they are estimated (per albedo cluster with
+specular_clusters > 1: the result's clusters list and cluster_map (H, W)).
 Returns normals (H, W, 3), albedo (H, W, 3), residual (H, W; -1 where no normal was found),
 the specular coefficients used or estimated, and a summary. With 1 or 2 images (material with
 kd required) the global solver with smoothness, integrability and boundary priors runs instead and

@@ -34,6 +34,7 @@ struct NormalsCommandOptions {
   int irls_rounds = solve::NormalOptions{}.irls_rounds;
   bool fast = false;
   bool integrate = false;
+  int specular_clusters = 1;
   int threads = 0;
 };
 
@@ -65,6 +66,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   options.robust_scale = o.robust_scale;
   options.irls_rounds = o.irls_rounds;
   options.color_residuals = !o.fast;
+  options.specular_clusters = o.specular_clusters;
   if (dataset.material && !o.ignore_material) {
     options.model = dataset.material->model;
     options.material_known = true;
@@ -123,6 +125,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   metrics["specular_seconds"] = result.summary.specular_seconds;
   metrics["solve_seconds"] = result.summary.solve_seconds;
   metrics["iterations"] = result.summary.iterations;
+  metrics["specular_clusters"] = result.clusters.size();
   if (!ambiguity.pixels.empty()) {
     metrics["solver"] = "global (one or two images): data + smoothness + integrability + boundary";
   }
@@ -147,14 +150,29 @@ void RunNormals(const NormalsCommandOptions& o) {
   io::WriteImage(out.file("albedo.exr"), result.albedo);
   io::WriteImage(out.file("residual.exr"), result.residual);
   if (!ambiguity.pixels.empty()) io::WriteImage(out.file("ambiguity.exr"), ambiguity);
+  if (!result.cluster_map.pixels.empty())
+    io::WriteImage(out.file("clusters.exr"), result.cluster_map);
   if (result.material_estimated) {
-    const nlohmann::json material = {
+    nlohmann::json material = {
         {"model", reflectance::LobeName(options.model)},
         {"ks", {result.ks[0], result.ks[1], result.ks[2]}},
         {"shininess", result.shininess},
         {"ambient", {1, 1, 1}},
         {"ka", {result.ambient_term[0], result.ambient_term[1], result.ambient_term[2]}},
         {"comment", "estimated by iphong normals: " + result.specular_note}};
+    if (result.clusters.size() > 1) {
+      // Per albedo cluster; the top-level coefficients are the largest cluster's.
+      material["clusters"] = nlohmann::json::array();
+      for (const solve::SpecularCluster& c : result.clusters) {
+        material["clusters"].push_back(
+            {{"albedo", {c.albedo_center[0], c.albedo_center[1], c.albedo_center[2]}},
+             {"pixels", c.pixels},
+             {"ks", {c.ks[0], c.ks[1], c.ks[2]}},
+             {"shininess", c.shininess},
+             {"ka", {c.ambient_term[0], c.ambient_term[1], c.ambient_term[2]}},
+             {"identifiable", c.identifiable}});
+      }
+    }
     io::WriteTextFile(out.file("material.json"), material.dump(2) + "\n");
   }
   if (errors)
@@ -198,7 +216,17 @@ void RunNormals(const NormalsCommandOptions& o) {
         data.pixel_count(), data.images, reflectance::LobeName(options.model).c_str(), load_seconds,
         result.summary.solve_seconds, result.summary.iterations);
   }
-  if (result.material_estimated) {
+  if (result.clusters.size() > 1) {
+    std::printf("Estimated per albedo cluster:\n");
+    for (std::size_t i = 0; i < result.clusters.size(); ++i) {
+      const solve::SpecularCluster& c = result.clusters[i];
+      std::printf(
+          "  #%zu: %zu pixels, albedo [%.3f %.3f %.3f]: ks = [%.3f %.3f %.3f], shininess = "
+          "%.1f (%s)\n",
+          i, c.pixels, c.albedo_center[0], c.albedo_center[1], c.albedo_center[2], c.ks[0], c.ks[1],
+          c.ks[2], c.shininess, c.note.c_str());
+    }
+  } else if (result.material_estimated) {
     std::printf(
         "Estimated ks = [%.3f %.3f %.3f], shininess = %.1f, ambient = [%.3f %.3f %.3f] (%s)\n",
         result.ks[0], result.ks[1], result.ks[2], result.shininess, result.ambient_term[0],
@@ -227,9 +255,10 @@ void RunNormals(const NormalsCommandOptions& o) {
         surface->consistency_mean_deg, surface->triangles);
   }
   std::printf(
-      "Wrote %s: normals.exr, normals.png, albedo.exr, residual.exr, metrics.json%s%s%s%s\n",
+      "Wrote %s: normals.exr, normals.png, albedo.exr, residual.exr, metrics.json%s%s%s%s%s\n",
       o.output_dir.c_str(), result.material_estimated ? ", material.json" : "",
       errors ? ", error.png" : "", ambiguity.pixels.empty() ? "" : ", ambiguity.exr",
+      result.cluster_map.pixels.empty() ? "" : ", clusters.exr",
       surface ? ", height.exr, mesh.ply, height.png, integrate.json" : "");
 }
 
@@ -304,6 +333,11 @@ void AddNormalsCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--fast", o->fast,
                 "Fit normals to the luminance instead of all three channels (about 2x faster)");
+  cmd->add_option("--specular-clusters", o->specular_clusters,
+                  "Estimate ks and shininess per cluster of the albedo (objects of several "
+                  "materials); 1 = shared by the object")
+      ->check(CLI::Range(1, 16))
+      ->capture_default_str();
   cmd->add_flag("--integrate", o->integrate,
                 "Also integrate the normals: height.exr, mesh.ply (albedo colours), height.png");
   cmd->add_option("--threads", o->threads, "Threads (0 = all cores)")

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <memory>
 #include <numeric>
 #include <random>
 #include <stdexcept>
@@ -467,6 +468,122 @@ SpecularFit FitSpecular(const PhotometricData& data, const std::vector<std::size
   return fit;
 }
 
+// ks (RGB), shininess and ambient of one group of pixels (a cluster, or the whole object):
+// rounds of the global fit over a sample alternate with per-pixel refits of the sample.
+void EstimateSpecular(const PhotometricData& data, const std::vector<std::size_t>& members,
+                      const NormalOptions& options, std::vector<PixelSolution>& solutions,
+                      SpecularCluster* cluster) {
+  std::vector<std::size_t> sample = members;
+  std::mt19937 rng(12345);
+  std::shuffle(sample.begin(), sample.end(), rng);
+  sample.resize(std::min<std::size_t>(sample.size(), options.specular_sample));
+  SpecularFit fit;
+  // One moderate start; the bounded log-shininess has taken it to n = 6 … 130 on DiLiGenT and
+  // back to the true value on renders.
+  fit.ks = Vec3d::Constant(0.1);
+  fit.shininess = 20;
+  for (int round = 0; round < options.specular_rounds; ++round) {
+    fit = FitSpecular(data, sample, solutions, options, fit);
+    NormalOptions with_ambient = options;
+    with_ambient.ambient_term = fit.ambient;
+    // Only the sample's normals feed the next global fit; the rest are fitted once at the end.
+    ParallelFor(0, sample.size(), 64, options.threads, [&](std::size_t b, std::size_t e) {
+      PixelFitter fitter(data, with_ambient, fit.ks, fit.shininess);
+      for (std::size_t i = b; i < e; ++i) {
+        PixelSolution refined = solutions[sample[i]];
+        fitter.FitWithRestart(sample[i], refined);
+        solutions[sample[i]].normal = refined.normal;
+      }
+    });
+  }
+  const double gain = fit.cost_without_specular > 0 ? 1 - fit.cost / fit.cost_without_specular : 0;
+  if (!(fit.ks.maxCoeff() > 1e-3) || gain < 0.02) {
+    cluster->identifiable = false;
+    cluster->note =
+        "no highlights seen: ks and shininess are not identifiable; fitted without a specular "
+        "term";
+    return;
+  }
+  // At its lower bound the lobe is as broad as the diffuse term and trades places with it (seen
+  // on grazing-angle clusters): not a highlight either.
+  if (fit.shininess < 1.05) {
+    cluster->identifiable = false;
+    cluster->note =
+        "the specular lobe fitted as broad as the diffuse term (shininess 1): not identifiable";
+    return;
+  }
+  cluster->ks = fit.ks;
+  cluster->shininess = fit.shininess;
+  cluster->ambient_term = fit.ambient;
+  cluster->estimated = true;
+  cluster->note =
+      "estimated from " + std::to_string(sample.size()) + " pixels; robust cost reduced by " +
+      std::to_string(static_cast<int>(std::round(100 * gain))) + "% against no specular term";
+}
+
+// k-means (k-means++ seeds, fixed random stream) of the solved pixels' albedo on chromaticity
+// (r, g over r + g + b) and a tenth of the log brightness; colour tells materials apart, shading
+// leftovers in the brightness should not. Returns the number of non-empty clusters, numbered
+// from the largest.
+int ClusterAlbedo(const std::vector<PixelSolution>& solutions, int k,
+                  std::vector<int>* cluster_of) {
+  std::vector<std::size_t> solved;
+  std::vector<Eigen::Vector3d> feature;
+  for (std::size_t p = 0; p < solutions.size(); ++p) {
+    const Vec3d a = solutions[p].albedo.cwiseMax(0.0);
+    const double sum = a.sum();
+    if (solutions[p].status != PixelStatus::kSolved || !(sum > 0)) continue;
+    solved.push_back(p);
+    feature.emplace_back(a[0] / sum, a[1] / sum, 0.1 * std::log(sum));
+  }
+  std::fill(cluster_of->begin(), cluster_of->end(), 0);
+  if (static_cast<int>(solved.size()) < 2 * k) return 1;
+  std::mt19937 rng(7);
+  std::vector<Eigen::Vector3d> centers = {feature[rng() % feature.size()]};
+  std::vector<double> d2(feature.size());
+  while (static_cast<int>(centers.size()) < k) {
+    for (std::size_t i = 0; i < feature.size(); ++i) {
+      d2[i] = INFINITY;
+      for (const auto& c : centers) d2[i] = std::min(d2[i], (feature[i] - c).squaredNorm());
+    }
+    std::discrete_distribution<std::size_t> pick(d2.begin(), d2.end());
+    centers.push_back(feature[pick(rng)]);
+  }
+  std::vector<int> label(feature.size(), 0);
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    bool changed = false;
+    for (std::size_t i = 0; i < feature.size(); ++i) {
+      int best = 0;
+      for (int c = 1; c < k; ++c) {
+        if ((feature[i] - centers[c]).squaredNorm() < (feature[i] - centers[best]).squaredNorm())
+          best = c;
+      }
+      changed |= best != label[i];
+      label[i] = best;
+    }
+    std::vector<Eigen::Vector3d> sum(k, Eigen::Vector3d::Zero());
+    std::vector<int> count(k, 0);
+    for (std::size_t i = 0; i < feature.size(); ++i) sum[label[i]] += feature[i], ++count[label[i]];
+    for (int c = 0; c < k; ++c) {
+      if (count[c] > 0) centers[c] = sum[c] / count[c];
+    }
+    if (!changed && iteration > 0) break;
+  }
+  // Renumber from the largest cluster, dropping empty ones.
+  std::vector<int> count(k, 0);
+  for (int l : label) ++count[l];
+  std::vector<int> order(k);
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return count[a] > count[b]; });
+  std::vector<int> rename(k, 0);
+  int used = 0;
+  for (int c : order) {
+    if (count[c] > 0) rename[c] = used++;
+  }
+  for (std::size_t i = 0; i < solved.size(); ++i) (*cluster_of)[solved[i]] = rename[label[i]];
+  return used;
+}
+
 }  // namespace
 
 std::string NormalOptions::Validate() const {
@@ -483,6 +600,7 @@ std::string NormalOptions::Validate() const {
     return "ks and shininess must be finite and >= 0";
   }
   if (specular_rounds < 0 || specular_sample < 1) return "specular rounds/sample out of range";
+  if (specular_clusters < 1 || specular_clusters > 16) return "specular clusters must be in 1..16";
   return "";
 }
 
@@ -508,86 +626,94 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
   });
   result.summary.init_seconds = SecondsSince(start);
 
-  Vec3d ks = options.ks;
-  double shininess = options.shininess;
-  result.material_estimated = false;
   const bool nonlinear = options.model != reflectance::Lobe::kLambert;
-  NormalOptions effective = options;  // with the estimated ambient term, once there is one
-  auto fit_all = [&](const Vec3d& fit_ks, double fit_n, std::vector<PixelSolution>& target,
-                     bool report) {
-    std::atomic<std::size_t> done{0};
-    std::atomic<long long> iterations{0};
-    ParallelFor(0, pixels, 256, options.threads, [&](std::size_t b, std::size_t e) {
-      PixelFitter fitter(data, effective, fit_ks, fit_n);
-      long long local = 0;
-      for (std::size_t p = b; p < e; ++p) {
-        if (target[p].status != PixelStatus::kSolved) continue;
-        fitter.FitWithRestart(p, target[p]);
-        local += target[p].iterations;
-      }
-      iterations += local;
-      const std::size_t now = done += e - b;
-      if (report && options.progress) options.progress(static_cast<double>(now) / pixels);
-    });
-    return iterations.load();
-  };
-
-  if (nonlinear && !options.material_known) {
-    // Alternate: per-pixel fits on a sample, then a global fit of ks and shininess.
-    start = Clock::now();
-    std::vector<std::size_t> sample;
-    std::mt19937 rng(12345);
-    for (std::size_t p = 0; p < pixels; ++p)
-      if (solutions[p].status == PixelStatus::kSolved) sample.push_back(p);
-    std::shuffle(sample.begin(), sample.end(), rng);
-    sample.resize(std::min<std::size_t>(sample.size(), options.specular_sample));
-    SpecularFit fit;
-    // One moderate start; the bounded log-shininess has taken it to n = 6 … 130 on DiLiGenT and
-    // back to the true value on renders.
-    fit.ks = Vec3d::Constant(0.1);
-    fit.shininess = 20;
-    for (int round = 0; round < options.specular_rounds; ++round) {
-      fit = FitSpecular(data, sample, solutions, options, fit);
-      NormalOptions with_ambient = options;
-      with_ambient.ambient_term = fit.ambient;
-      // Only the sample's normals feed the next global fit; the rest are fitted once at the end.
-      ParallelFor(0, sample.size(), 64, options.threads, [&](std::size_t b, std::size_t e) {
-        PixelFitter fitter(data, with_ambient, fit.ks, fit.shininess);
-        for (std::size_t i = b; i < e; ++i) {
-          PixelSolution refined = solutions[sample[i]];
-          fitter.FitWithRestart(sample[i], refined);
-          solutions[sample[i]].normal = refined.normal;
-        }
-      });
-    }
-    const double gain =
-        fit.cost_without_specular > 0 ? 1 - fit.cost / fit.cost_without_specular : 0;
-    if (!(fit.ks.maxCoeff() > 1e-3) || gain < 0.02) {
-      result.specular_identifiable = false;
-      result.specular_note =
-          "no highlights seen: ks and shininess are not identifiable; fitted "
-          "without a specular term";
-      ks = Vec3d::Zero();
-      shininess = 1;
-    } else {
-      ks = fit.ks;
-      shininess = fit.shininess;
-      effective.ambient_term = fit.ambient;
-      result.material_estimated = true;
-      result.specular_note =
-          "estimated from " + std::to_string(sample.size()) + " pixels; robust cost reduced by " +
-          std::to_string(static_cast<int>(std::round(100 * gain))) + "% against no specular term";
-    }
-    result.summary.specular_seconds = SecondsSince(start);
+  // Clusters of the albedo (one: the whole object) and their specular coefficients.
+  std::vector<int> cluster_of(pixels, 0);
+  int clusters = 1;
+  if (nonlinear && !options.material_known && options.specular_clusters > 1) {
+    clusters = ClusterAlbedo(solutions, options.specular_clusters, &cluster_of);
   }
-  result.ks = ks;
-  result.shininess = shininess;
-  result.ambient_term = effective.ambient_term;
+  start = Clock::now();
+  for (int c = 0; c < clusters; ++c) {
+    std::vector<std::size_t> members;
+    for (std::size_t p = 0; p < pixels; ++p)
+      if (cluster_of[p] == c && solutions[p].status == PixelStatus::kSolved) members.push_back(p);
+    SpecularCluster cluster;
+    cluster.pixels = members.size();
+    for (std::size_t p : members) cluster.albedo_center += solutions[p].albedo;
+    if (!members.empty()) cluster.albedo_center /= static_cast<double>(members.size());
+    if (!nonlinear) {
+      // Lambertian: no specular term to speak of.
+    } else if (options.material_known) {
+      cluster.ks = options.ks;
+      cluster.shininess = options.shininess;
+      cluster.ambient_term = options.ambient_term;
+    } else {
+      EstimateSpecular(data, members, options, solutions, &cluster);
+    }
+    result.clusters.push_back(cluster);
+  }
+  if (nonlinear && !options.material_known) result.summary.specular_seconds = SecondsSince(start);
+  // A cluster that saw no highlight borrows from the largest one that did (clusters are numbered
+  // from the largest): a matte-looking part of a shiny object is more likely than a second
+  // material.
+  const auto donor = std::find_if(result.clusters.begin(), result.clusters.end(),
+                                  [](const SpecularCluster& c) { return c.estimated; });
+  if (donor != result.clusters.end()) {
+    for (SpecularCluster& c : result.clusters) {
+      if (c.estimated || c.identifiable) continue;
+      c.ks = donor->ks;
+      c.shininess = donor->shininess;
+      c.ambient_term = donor->ambient_term;
+      c.note = "no highlights seen in this cluster: coefficients of cluster #" +
+               std::to_string(donor - result.clusters.begin());
+    }
+  }
+  const auto largest = std::max_element(
+      result.clusters.begin(), result.clusters.end(),
+      [](const SpecularCluster& a, const SpecularCluster& b) { return a.pixels < b.pixels; });
+  result.ks = largest->ks;
+  result.shininess = largest->shininess;
+  result.ambient_term = largest->ambient_term;
+  result.specular_identifiable = largest->identifiable;
+  result.specular_note = largest->note;
+  result.material_estimated = std::any_of(result.clusters.begin(), result.clusters.end(),
+                                          [](const SpecularCluster& c) { return c.estimated; });
 
   if (nonlinear) {
     start = Clock::now();
-    result.summary.iterations = fit_all(ks, shininess, solutions, true);
+    // The options of each cluster (its ambient term), for its fitters.
+    std::vector<NormalOptions> cluster_options(clusters, options);
+    for (int c = 0; c < clusters; ++c)
+      cluster_options[c].ambient_term = result.clusters[c].ambient_term;
+    std::atomic<std::size_t> done{0};
+    std::atomic<long long> iterations{0};
+    ParallelFor(0, pixels, 256, options.threads, [&](std::size_t b, std::size_t e) {
+      std::vector<std::unique_ptr<PixelFitter>> fitters(clusters);  // made when first needed
+      long long local = 0;
+      for (std::size_t p = b; p < e; ++p) {
+        if (solutions[p].status != PixelStatus::kSolved) continue;
+        const int c = cluster_of[p];
+        if (!fitters[c]) {
+          const SpecularCluster& k = result.clusters[c];
+          fitters[c] = std::make_unique<PixelFitter>(data, cluster_options[c], k.ks, k.shininess);
+        }
+        fitters[c]->FitWithRestart(p, solutions[p]);
+        local += solutions[p].iterations;
+      }
+      iterations += local;
+      const std::size_t now = done += e - b;
+      if (options.progress) options.progress(static_cast<double>(now) / pixels);
+    });
+    result.summary.iterations = iterations.load();
     result.summary.solve_seconds = SecondsSince(start);
+  }
+  if (clusters > 1) {
+    result.cluster_map = ImageF(data.width, data.height, 1, -1.0f);
+    for (std::size_t i = 0; i < pixels; ++i) {
+      result.cluster_map.pixels[static_cast<std::size_t>(data.pixels[i])] =
+          static_cast<float>(cluster_of[i]);
+    }
   }
 
   result.normals = ImageF(data.width, data.height, 3);

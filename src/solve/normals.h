@@ -15,12 +15,14 @@
 // 3. Without known coefficients, ks (RGB), the shininess and the ambient term Ia⊙ka (RGB) are
 //    estimated jointly with the normals: rounds of a
 //    global Ceres fit over a sample of pixels (normals fixed, albedo eliminated) alternate with
-//    the per-pixel fits. When no highlight is seen they are reported as not identifiable.
+//    the per-pixel fits. When no highlight is seen they are reported as not identifiable. They
+//    are shared by the object, or estimated per cluster of the albedo (specular_clusters).
 // Frame: SPEC.md's camera frame, orthographic view V = (0, 0, 1).
 #pragma once
 
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "reflectance/material.h"
 #include "solve/photometric_data.h"
@@ -51,7 +53,10 @@ struct NormalOptions {
   Vec3d ks = Vec3d::Zero();
   double shininess = 1;
   int specular_rounds = 2;
-  int specular_sample = 1000;  // pixels in the global fit
+  int specular_sample = 1000;  // pixels in the global fit (per cluster)
+  // Objects of several materials: ks, shininess and the ambient term per cluster of the
+  // (Woodham) albedo, by k-means on its chromaticity and brightness. 1 = shared by the object.
+  int specular_clusters = 1;
 
   int threads = 0;
   // Called with the fraction done (0..1) from worker threads; must be thread-safe.
@@ -72,6 +77,18 @@ struct NormalSummary {
   std::size_t underdetermined_pixels = 0;  // fewer than 3 usable lights (flagged)
 };
 
+// The specular coefficients of one albedo cluster (of the whole object when there is one).
+struct SpecularCluster {
+  Vec3d albedo_center = Vec3d::Zero();  // mean Woodham albedo of its pixels
+  std::size_t pixels = 0;
+  Vec3d ks = Vec3d::Zero();
+  double shininess = 1;
+  Vec3d ambient_term = Vec3d::Zero();
+  bool estimated = false;  // false: known (material.json) or not identifiable
+  bool identifiable = true;
+  std::string note;
+};
+
 struct NormalResult {
   ImageF normals;   // 3 channels, unit xyz in the camera frame; 0 outside the mask
   ImageF albedo;    // 3 channels, kd
@@ -83,6 +100,9 @@ struct NormalResult {
   bool material_estimated = false;
   bool specular_identifiable = true;
   std::string specular_note;
+  // One per cluster; ks, shininess and ambient_term above are the largest cluster's.
+  std::vector<SpecularCluster> clusters;
+  ImageF cluster_map;  // 1 channel: the cluster of each pixel, −1 outside (clusters > 1 only)
   NormalSummary summary;
 };
 

@@ -87,3 +87,17 @@ def test_two_images_use_the_global_solver_with_priors():
     assert e["median_deg"] < 3
     assert r["ambiguity_deg"].shape == (48, 48)
     assert r["ambiguity_deg"][out["mask"]].max() > 10  # two cones: two solutions apart
+
+
+def test_specular_clusters_option_returns_one_entry_per_cluster():
+    r = iphong.render(SCENE, per_light=True)
+    out = iphong.estimate_normals(r["images"], r["light_directions"], r["light_intensities"],
+                                  r["mask"], specular_clusters=2)
+    assert len(out["clusters"]) == 2 and out["cluster_map"].shape == (80, 80)
+    summary = out["summary"]
+    assert sum(c["pixels"] for c in out["clusters"]) == summary["pixels"] - summary["dark_pixels"]
+    assert {"ks", "shininess", "albedo", "identifiable"} <= set(out["clusters"][0])
+    # One material split in two: both halves find it.
+    for c in out["clusters"]:
+        assert c["shininess"] == pytest.approx(20, rel=0.15)
+    assert iphong.angular_error(out["normals"], r["normals"], r["mask"])["mean_deg"] < 0.5
