@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 
 #include "geometry/height_map.h"
@@ -13,16 +12,12 @@
 #include "io/mesh_io.h"
 #include "io/staging.h"
 #include "io/surface.h"
+#include "real_data_dir.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
 
 namespace iphong::integrate {
 namespace {
-
-std::string DataDir() {
-  const char* env = std::getenv("IPHONG_DATA_DIR");
-  return env ? env : IPHONG_SOURCE_DIR "/../shared/data";
-}
 
 struct Case {
   const char* path;
@@ -34,7 +29,7 @@ void PrintTo(const Case& c, std::ostream* os) { *os << c.path << " " << MethodNa
 class IntegrateRealData : public ::testing::TestWithParam<Case> {};
 
 TEST_P(IntegrateRealData, GroundTruthNormalsIntegrateToAConsistentSurface) {
-  const std::string dir = DataDir() + "/" + GetParam().path;
+  const std::string dir = test::RealDataDir() + "/" + GetParam().path;
   if (!std::filesystem::exists(dir)) GTEST_SKIP() << "no real data at " << dir;
   io::DatasetLoadOptions load;
   load.load_images = false;
@@ -75,7 +70,7 @@ TEST_P(IntegrateRealData, GroundTruthNormalsIntegrateToAConsistentSurface) {
 // The end-to-end check: the cat's recovered normals become a mesh the mesh library
 // (as MeshLab and Blender would) reads back, with the files iphong writes beside it.
 TEST(IntegrateRealDataCat, RecoveredNormalsBecomeAMeshThatReadsBack) {
-  const std::string dir = DataDir() + "/diligent/cat";
+  const std::string dir = test::RealDataDir() + "/diligent/cat";
   if (!std::filesystem::exists(dir)) GTEST_SKIP() << "no real data at " << dir;
   const io::ObservationSet set = io::LoadObservations(dir);
   solve::NormalOptions options;

@@ -2,7 +2,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
@@ -10,6 +9,7 @@
 #include "io/dataset.h"
 #include "io/mesh_io.h"
 #include "io/scene_file.h"
+#include "real_data_dir.h"
 
 namespace iphong::io {
 namespace {
@@ -259,13 +259,9 @@ TEST_F(TempDir, MeshSaveLoadRoundTrip) {
 }
 
 // The real DiLiGenT data beside the checkout (skipped when absent).
-std::string SharedData() {
-  const char* env = std::getenv("IPHONG_DATA_DIR");
-  return env ? env : IPHONG_SOURCE_DIR "/../shared/data";
-}
 
 TEST(RealData, LoadsDiligentCrop8Ball) {
-  const std::string dir = SharedData() + "/diligent-crop8/ball";
+  const std::string dir = test::RealDataDir() + "/diligent-crop8/ball";
   if (!fs::exists(dir)) GTEST_SKIP() << "no real data at " << dir << " (set IPHONG_DATA_DIR)";
   const Dataset d = LoadDataset(dir);
   ASSERT_EQ(d.images.size(), 96u);

@@ -1,20 +1,15 @@
 // Published figures on the real DiLiGenT data beside the checkout (skipped when it is absent).
 #include <gtest/gtest.h>
 
-#include <cstdlib>
 #include <filesystem>
 
 #include "io/dataset.h"
+#include "real_data_dir.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
 
 namespace iphong::solve {
 namespace {
-
-std::string DataDir() {
-  const char* env = std::getenv("IPHONG_DATA_DIR");
-  return env ? env : IPHONG_SOURCE_DIR "/../shared/data";
-}
 
 struct Object {
   const char* path;
@@ -28,7 +23,7 @@ void PrintTo(const Object& o, std::ostream* os) { *os << o.path; }
 class RealData : public ::testing::TestWithParam<Object> {
  protected:
   void SetUp() override {
-    dir_ = DataDir() + "/" + GetParam().path;
+    dir_ = test::RealDataDir() + "/" + GetParam().path;
     if (!std::filesystem::exists(dir_)) GTEST_SKIP() << "no real data at " << dir_;
     io::Dataset d = io::LoadDataset(dir_);
     std::vector<const float*> images;
