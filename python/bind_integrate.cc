@@ -14,13 +14,16 @@ namespace py = pybind11;
 namespace iphong::python {
 namespace {
 
-ImageF ToScalarImage(const py::object& value, int width, int height, const char* what) {
+// A (H, W) float array; of the size of `like` when given.
+ImageF ToScalarImage(const py::object& value, const char* what, const ImageF* like = nullptr) {
   auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
-  if (!a || a.ndim() != 2 || a.shape(0) != height || a.shape(1) != width) {
-    throw std::invalid_argument(std::string(what) + " must have shape (H, W) = (" +
-                                std::to_string(height) + ", " + std::to_string(width) + ")");
+  if (!a || a.ndim() != 2 || (like && (a.shape(0) != like->height || a.shape(1) != like->width))) {
+    throw std::invalid_argument(
+        std::string(what) + " must have shape (H, W)" +
+        (like ? " = (" + std::to_string(like->height) + ", " + std::to_string(like->width) + ")"
+              : std::string()));
   }
-  ImageF image(width, height, 1);
+  ImageF image(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)), 1);
   std::memcpy(image.pixels.data(), a.data(), image.pixels.size() * sizeof(float));
   return image;
 }
@@ -44,17 +47,6 @@ geometry::HeightMapFrame Frame(double pixel_size, const py::object& intrinsics) 
   return frame;
 }
 
-// The pixels with a normal when no mask is given (maps store 0 outside the object).
-Mask MaskOrNonZero(const py::object& mask_in, const ImageF& normals) {
-  if (!mask_in.is_none()) return ToMask(mask_in, normals.width, normals.height);
-  Mask mask(normals.width, normals.height, false);
-  for (std::size_t p = 0; p < mask.inside.size(); ++p) {
-    const float* n = normals.pixels.data() + 3 * p;
-    mask.inside[p] = n[0] != 0 || n[1] != 0 || n[2] != 0;
-  }
-  return mask;
-}
-
 }  // namespace
 
 void BindIntegrate(py::module_& m) {
@@ -65,7 +57,9 @@ void BindIntegrate(py::module_& m) {
          const py::object& depth_prior, double prior_weight, double min_cos, bool allow_back_facing,
          double stiffness, int threads) {
         const ImageF normals = ToImage(normals_in, "normals");
-        const Mask mask = MaskOrNonZero(mask_in, normals);
+        // No mask: the pixels with a normal (maps store 0 outside the object).
+        const Mask mask = mask_in.is_none() ? NonZeroPixels(normals)
+                                            : ToMask(mask_in, normals.width, normals.height);
         integrate::IntegrateOptions o;
         o.method = integrate::ParseMethod(method);
         o.solver = ParseSolver(solver);
@@ -74,7 +68,7 @@ void BindIntegrate(py::module_& m) {
         o.perspective = frame.perspective;
         o.intrinsics = {frame.fx, frame.fy, frame.cx, frame.cy};
         if (!depth_prior.is_none()) {
-          o.depth_prior = ToScalarImage(depth_prior, normals.width, normals.height, "depth_prior");
+          o.depth_prior = ToScalarImage(depth_prior, "depth_prior", &normals);
         }
         o.prior_weight = prior_weight;
         o.min_cos = min_cos;
@@ -127,10 +121,8 @@ Raises ValueError on bad input (size mismatch, empty mask, NaN, non-unit or back
       "height_to_mesh",
       [](const py::object& height_in, const py::object& mask_in, const py::object& normals_in,
          double pixel_size, const py::object& intrinsics) {
-        auto h = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(height_in);
-        if (!h || h.ndim() != 2) throw std::invalid_argument("height must have shape (H, W)");
-        const int height = static_cast<int>(h.shape(0)), width = static_cast<int>(h.shape(1));
-        const ImageF map = ToScalarImage(height_in, width, height, "height");
+        const ImageF map = ToScalarImage(height_in, "height");
+        const int width = map.width, height = map.height;
         const Mask mask = ToMask(mask_in, width, height);
         ImageF normals;
         geometry::HeightMeshOptions options;
@@ -162,10 +154,8 @@ Raises ValueError on bad input (size mismatch, empty mask, NaN, non-unit or back
       "normals_from_height",
       [](const py::object& height_in, const py::object& mask_in, double pixel_size,
          const py::object& intrinsics) {
-        auto h = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(height_in);
-        if (!h || h.ndim() != 2) throw std::invalid_argument("height must have shape (H, W)");
-        const int height = static_cast<int>(h.shape(0)), width = static_cast<int>(h.shape(1));
-        const ImageF map = ToScalarImage(height_in, width, height, "height");
+        const ImageF map = ToScalarImage(height_in, "height");
+        const int width = map.width, height = map.height;
         return ToArray(geometry::NormalsFromHeightMap(map, ToMask(mask_in, width, height),
                                                       Frame(pixel_size, intrinsics)));
       },

@@ -82,18 +82,9 @@ NormalInput ReadNormalInput(const IntegrateCommandOptions& o) {
   if (!o.mask.empty()) {
     in.mask = MaskFromImage(o.mask);
   } else if (in.mask.width == 0) {
-    // The pixels with a normal (maps store 0 outside the object).
-    in.mask = Mask(in.normals.width, in.normals.height, false);
-    for (std::size_t p = 0; p < in.normals.pixel_count(); ++p) {
-      const float* n = in.normals.pixels.data() + 3 * p;
-      in.mask.inside[p] = n[0] != 0 || n[1] != 0 || n[2] != 0;
-    }
-  } else {
-    // Dataset masks can include pixels where the ground truth is 0.
-    for (std::size_t p = 0; p < in.mask.inside.size(); ++p) {
-      const float* n = in.normals.pixels.data() + 3 * p;
-      if (n[0] == 0 && n[1] == 0 && n[2] == 0) in.mask.inside[p] = 0;
-    }
+    in.mask = NonZeroPixels(in.normals);
+  } else if (in.mask.width == in.normals.width && in.mask.height == in.normals.height) {
+    in.mask = NonZeroPixels(in.normals, &in.mask);  // dataset masks include pixels GT leaves 0
   }
   if (!o.albedo.empty()) in.albedo = io::ReadImage(o.albedo);
   if (!in.albedo.pixels.empty() &&

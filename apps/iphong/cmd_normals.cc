@@ -180,13 +180,11 @@ void RunNormals(const NormalsCommandOptions& o) {
   std::optional<io::SurfaceFiles> surface;
   integrate::IntegrateResult heights;
   if (o.integrate) {
-    // Pixels without a normal (dark everywhere) are left out; silhouette normals may tip
-    // slightly past 90°.
+    // Pixels the solver flagged (residual −1: dark everywhere or too few lights) carry a
+    // placeholder normal and are left out; silhouette normals may tip slightly past 90°.
     Mask with_normal = dataset.mask;
     for (std::size_t p = 0; p < with_normal.inside.size(); ++p) {
-      if (result.normals.pixels[3 * p + 2] == 0 && result.normals.pixels[3 * p] == 0) {
-        with_normal.inside[p] = 0;
-      }
+      if (result.residual.pixels[p] < 0) with_normal.inside[p] = 0;
     }
     integrate::IntegrateOptions integration;
     integration.allow_back_facing = true;

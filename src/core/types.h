@@ -60,4 +60,16 @@ inline std::size_t Mask::count() const {
   return n;
 }
 
+// The pixels where some channel of `image` is non-zero (normal maps store 0 outside the object),
+// within `within` when given (same size).
+inline Mask NonZeroPixels(const ImageF& image, const Mask* within = nullptr) {
+  Mask mask(image.width, image.height, false);
+  for (std::size_t p = 0; p < image.pixel_count(); ++p) {
+    if (within && !within->inside[p]) continue;
+    const float* v = image.pixels.data() + p * image.channels;
+    for (int c = 0; c < image.channels; ++c) mask.inside[p] |= v[c] != 0;
+  }
+  return mask;
+}
+
 }  // namespace iphong

@@ -72,10 +72,7 @@ SurfaceFiles WriteSurfaceFiles(const StagingDirectory& out,
   }
 
   const ImageF back = geometry::NormalsFromHeightMap(result.height, mask, frame);
-  Mask compared = mask;
-  for (std::size_t p = 0; p < compared.inside.size(); ++p) {
-    if (back.pixels[3 * p + 2] == 0 && back.pixels[3 * p] == 0) compared.inside[p] = 0;
-  }
+  const Mask compared = NonZeroPixels(back, &mask);  // pixels with a neighbour each way
   if (compared.count() > 0) {
     const solve::AngularErrorMetrics m = solve::CompareNormals(back, normals, compared);
     files.consistency_mean_deg = m.mean_deg;
