@@ -27,14 +27,15 @@ TriangleMesh MeshFromHeightMap(const ImageF& height, const Mask& mask, const Hei
                                const HeightMeshOptions& options, std::vector<int>* vertex_pixel) {
   const int w = height.width, h = height.height;
   TriangleMesh mesh;
-  std::vector<int> vertex(static_cast<std::size_t>(w) * h, -1);
+  std::vector<int> vertex(static_cast<std::size_t>(w) * h, -1);  // pixel → vertex
+  std::vector<int> pixel_of;                                     // vertex → pixel
   for (int r = 0; r < h; ++r) {
     for (int c = 0; c < w; ++c) {
       if (!Valid(height, mask, c, r)) continue;
       vertex[static_cast<std::size_t>(r) * w + c] = static_cast<int>(mesh.positions.size());
       mesh.positions.push_back(HeightMapPoint(frame, w, h, c, r, *height.at(c, r)));
       mesh.uvs.emplace_back((c + 0.5) / w, (r + 0.5) / h);
-      if (vertex_pixel) vertex_pixel->push_back(r * w + c);
+      pixel_of.push_back(r * w + c);
     }
   }
   // Continuity of the edge from (c, r) to the right (axis 0) or downward (axis 1).
@@ -68,11 +69,6 @@ TriangleMesh MeshFromHeightMap(const ImageF& height, const Mask& mask, const Hei
   }
   mesh.corner_normals.resize(3 * mesh.triangles.size());
   if (options.normals) {
-    // Pixel of each vertex, to look the normals up.
-    std::vector<int> pixel_of(mesh.positions.size());
-    for (std::size_t p = 0; p < vertex.size(); ++p) {
-      if (vertex[p] >= 0) pixel_of[vertex[p]] = static_cast<int>(p);
-    }
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       for (int k = 0; k < 3; ++k) {
         const float* n =
@@ -83,6 +79,7 @@ TriangleMesh MeshFromHeightMap(const ImageF& height, const Mask& mask, const Hei
   } else {
     ComputeCornerNormals(mesh, 180.0);
   }
+  if (vertex_pixel) *vertex_pixel = std::move(pixel_of);
   return mesh;
 }
 

@@ -39,18 +39,7 @@ SurfaceFiles WriteSurfaceFiles(const StagingDirectory& out,
   files.triangles = mesh.triangles.size();
   std::vector<Vec3f> colors;
   if (options.albedo) {
-    // Albedo scales are arbitrary (light intensities): the 99th percentile maps to 0.9.
-    std::vector<float> peaks;
-    for (int p : vertex_pixel) {
-      const float* a = options.albedo->at(p % options.albedo->width, p / options.albedo->width);
-      peaks.push_back(std::max({a[0], a[1], a[2]}));
-    }
-    float scale = 1;
-    if (!peaks.empty()) {
-      const std::size_t k = static_cast<std::size_t>(0.99 * (peaks.size() - 1));
-      std::nth_element(peaks.begin(), peaks.begin() + k, peaks.end());
-      if (peaks[k] > 0) scale = 0.9f / peaks[k];
-    }
+    const float scale = render::AlbedoDisplayScale(*options.albedo);
     for (int p : vertex_pixel) {
       const float* a = options.albedo->at(p % options.albedo->width, p / options.albedo->width);
       colors.emplace_back(scale * a[0], scale * a[1], scale * a[2]);

@@ -10,24 +10,28 @@ namespace iphong::render {
 namespace {
 
 ImageF NormalizedTexture(const ImageF& texture) {
-  std::vector<float> peaks;
-  peaks.reserve(texture.pixel_count());
-  for (std::size_t p = 0; p < texture.pixel_count(); ++p) {
-    const float* v = texture.pixels.data() + p * texture.channels;
-    float peak = v[0];
-    for (int c = 1; c < std::min(texture.channels, 3); ++c) peak = std::max(peak, v[c]);
-    if (peak > 0 && std::isfinite(peak)) peaks.push_back(peak);
-  }
   ImageF out = texture;
-  if (peaks.empty()) return out;
-  const std::size_t k = static_cast<std::size_t>(0.99 * (peaks.size() - 1));
-  std::nth_element(peaks.begin(), peaks.begin() + k, peaks.end());
-  const float scale = 0.8f / peaks[k];
+  const float scale = AlbedoDisplayScale(texture);
   for (float& v : out.pixels) v = std::isfinite(v) ? std::max(0.0f, v * scale) : 0.0f;
   return out;
 }
 
 }  // namespace
+
+float AlbedoDisplayScale(const ImageF& albedo) {
+  std::vector<float> peaks;
+  peaks.reserve(albedo.pixel_count());
+  for (std::size_t p = 0; p < albedo.pixel_count(); ++p) {
+    const float* v = albedo.pixels.data() + p * albedo.channels;
+    float peak = v[0];
+    for (int c = 1; c < std::min(albedo.channels, 3); ++c) peak = std::max(peak, v[c]);
+    if (peak > 0 && std::isfinite(peak)) peaks.push_back(peak);
+  }
+  if (peaks.empty()) return 1.0f;
+  const std::size_t k = static_cast<std::size_t>(0.99 * (peaks.size() - 1));
+  std::nth_element(peaks.begin(), peaks.begin() + k, peaks.end());
+  return 0.8f / peaks[k];
+}
 
 ImageF RenderPreview(const geometry::TriangleMesh& mesh, const PreviewOptions& options) {
   if (mesh.triangles.empty()) throw std::invalid_argument("nothing to preview: the mesh is empty");

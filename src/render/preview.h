@@ -11,10 +11,15 @@ struct PreviewOptions {
   double yaw_deg = -25;   // about the camera's y axis
   double pitch_deg = 30;  // about x: tips the top away so the relief shows
   // Linear colours (e.g. the recovered albedo) looked up at the mesh's uvs, in place of the
-  // clay colour; rescaled so that its 99th percentile is 0.8 (albedo scales are arbitrary).
+  // clay colour, rescaled by AlbedoDisplayScale.
   const ImageF* texture = nullptr;
   int threads = 0;
 };
+
+// The factor that maps the 99th percentile of an albedo image's brightest channel (over its
+// non-zero pixels) to 0.8: albedo scales are arbitrary (they absorb light intensities), pictures
+// and vertex colours want [0, 1].
+float AlbedoDisplayScale(const ImageF& albedo);
 
 // Linear RGB on a light grey background. Throws std::invalid_argument for an empty mesh.
 ImageF RenderPreview(const geometry::TriangleMesh& mesh, const PreviewOptions& options = {});
