@@ -7,7 +7,6 @@
 
 #include "arrays.h"
 #include "bindings.h"
-#include "solve/few_images.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
 
@@ -85,41 +84,19 @@ void BindSolve(py::module_& m) {
             options.model = reflectance::ParseLobe(d["model"].cast<std::string>());
           }
         }
-        if (k < 3) {
-          // One or two images: the global solver with priors; the albedo must be known.
-          if (material.is_none() || !material.cast<py::dict>().contains("kd")) {
-            throw std::invalid_argument(
-                "with 1 or 2 images pass material={'kd': ..., ...}: the coefficients must be "
-                "known");
-          }
-          solve::FewImageOptions few;
-          few.model = options.model;
-          few.material.ka = Vec3d::Zero();
-          few.material.kd = Rows(
+        if (k < 3 && (material.is_none() || !material.cast<py::dict>().contains("kd"))) {
+          throw std::invalid_argument(
+              "with 1 or 2 images pass material={'kd': ..., ...}: the coefficients must be "
+              "known");
+        }
+        if (!material.is_none() && material.cast<py::dict>().contains("kd")) {
+          options.known_albedo = Rows(
               DoubleArray::ensure(material.cast<py::dict>()["kd"]).reshape({1, 3}), 1, "kd")[0];
-          few.material.ks = options.ks;
-          few.material.shininess = options.shininess;
-          few.ambient_term = options.ambient_term;
-          few.threads = threads;
-          solve::FewImageResult r;
-          {
-            py::gil_scoped_release release;
-            r = solve::EstimateNormalsFewImages(data, few);
-          }
-          py::dict out;
-          out["normals"] = ToArray(r.normals);
-          out["residual"] = ToArray(r.residual);
-          out["ambiguity_deg"] = ToArray(r.ambiguity_deg);
-          out["model"] = reflectance::LobeName(few.model);
-          out["summary"] =
-              py::dict(py::arg("message") = r.message, py::arg("solve_seconds") = r.solve_seconds,
-                       py::arg("iterations") = r.iterations);
-          return out;
         }
         solve::NormalResult result;
         {
           py::gil_scoped_release release;
-          result = solve::EstimateNormals(data, options);
+          result = solve::RecoverNormals(data, options);
         }
         py::dict out;
         out["normals"] = ToArray(result.normals);
@@ -142,6 +119,9 @@ void BindSolve(py::module_& m) {
         }
         out["clusters"] = clusters;
         if (!result.cluster_map.pixels.empty()) out["cluster_map"] = ToArray(result.cluster_map);
+        if (!result.ambiguity_deg.pixels.empty()) {
+          out["ambiguity_deg"] = ToArray(result.ambiguity_deg);
+        }
         out["summary"] =
             py::dict(py::arg("message") = result.summary.message,
                      py::arg("init_seconds") = result.summary.init_seconds,

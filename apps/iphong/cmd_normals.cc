@@ -16,7 +16,6 @@
 #include "io/text_file.h"
 #include "io/visualize.h"
 #include "iphong/commands.h"
-#include "solve/few_images.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
 
@@ -73,6 +72,7 @@ void RunNormals(const NormalsCommandOptions& o) {
     options.ambient_term = dataset.material->ambient.cwiseProduct(dataset.material->material.ka);
     options.ks = dataset.material->material.ks;
     options.shininess = dataset.material->material.shininess;
+    if (dataset.material->kd_known) options.known_albedo = dataset.material->material.kd;
   }
   if (o.model) options.model = reflectance::ParseLobe(*o.model);
   if (tty) {
@@ -84,35 +84,15 @@ void RunNormals(const NormalsCommandOptions& o) {
   const solve::PhotometricData& data = loaded.observations;  // masked pixels only
   const double load_seconds = SecondsSince(total_start);
 
-  solve::NormalResult result;
-  ImageF ambiguity;
-  if (data.images < 3) {
-    // One or two images: the per-pixel problem is ambiguous; solve it globally with priors.
-    if (!dataset.material || !dataset.material->kd_known || o.ignore_material) {
-      throw std::runtime_error(o.dataset + "/material.json: with " + std::to_string(data.images) +
-                               " image(s) the coefficients must be known, kd (a uniform albedo) "
-                               "included");
-    }
-    solve::FewImageOptions few;
-    few.model = options.model;
-    few.material = dataset.material->material;
-    few.ambient_term = options.ambient_term;
-    few.threads = o.threads;
-    const solve::FewImageResult r = solve::EstimateNormalsFewImages(data, few);
-    result.model = options.model;
-    result.normals = r.normals;
-    result.residual = r.residual;
-    result.albedo = ImageF(data.width, data.height, 3);
-    for (int p : data.pixels)
-      for (int c = 0; c < 3; ++c)
-        result.albedo.pixels[3 * p + c] = static_cast<float>(few.material.kd[c]);
-    result.summary.solve_seconds = r.solve_seconds;
-    result.summary.iterations = r.iterations;
-    result.summary.message = r.message;
-    ambiguity = r.ambiguity_deg;
-  } else {
-    result = solve::EstimateNormals(data, options);
+  // One or two images: the per-pixel problem is ambiguous and the library solves it globally
+  // with priors, which needs the coefficients, kd included.
+  if (data.images < 3 && (!dataset.material || !dataset.material->kd_known || o.ignore_material)) {
+    throw std::runtime_error(o.dataset + "/material.json: with " + std::to_string(data.images) +
+                             " image(s) the coefficients must be known, kd (a uniform albedo) "
+                             "included");
   }
+  const solve::NormalResult result = solve::RecoverNormals(data, options);
+  const ImageF& ambiguity = result.ambiguity_deg;
   if (tty) std::fprintf(stderr, "\r%30s\r", "");
 
   nlohmann::json metrics;

@@ -16,6 +16,7 @@
 #include "core/timing.h"
 #include "reflectance/phong.h"
 #include "reflectance/shade.h"
+#include "solve/few_images.h"
 #include "solve/internal.h"
 
 namespace iphong::solve {
@@ -737,6 +738,42 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
       "solved " +
       std::to_string(pixels - result.summary.dark_pixels - result.summary.underdetermined_pixels) +
       " of " + std::to_string(pixels) + " pixels";
+  return result;
+}
+
+NormalResult RecoverNormals(const PhotometricData& data, const NormalOptions& options) {
+  if (data.images >= 3) return EstimateNormals(data, options);
+  if (!options.material_known || !options.known_albedo) {
+    throw std::invalid_argument("with " + std::to_string(data.images) +
+                                " image(s) the coefficients must be known, kd (a uniform albedo) "
+                                "included");
+  }
+  FewImageOptions few;
+  few.model = options.model;
+  few.material.kd = *options.known_albedo;
+  few.material.ks = options.ks;
+  few.material.shininess = options.shininess;
+  few.ambient_term = options.ambient_term;
+  few.threads = options.threads;
+  const FewImageResult r = EstimateNormalsFewImages(data, few);
+  NormalResult result;
+  result.model = options.model;
+  result.normals = r.normals;
+  result.residual = r.residual;
+  result.ambiguity_deg = r.ambiguity_deg;
+  result.ks = options.ks;
+  result.shininess = options.shininess;
+  result.ambient_term = options.ambient_term;
+  result.albedo = ImageF(data.width, data.height, 3);
+  for (int p : data.pixels) {
+    for (int c = 0; c < 3; ++c)
+      result.albedo.pixels[3 * p + c] = static_cast<float>(few.material.kd[c]);
+  }
+  result.summary.success = true;
+  result.summary.pixels = data.pixel_count();
+  result.summary.solve_seconds = r.solve_seconds;
+  result.summary.iterations = r.iterations;
+  result.summary.message = r.message;
   return result;
 }
 

@@ -21,6 +21,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -57,6 +58,8 @@ struct NormalOptions {
   // Objects of several materials: ks, shininess and the ambient term per cluster of the
   // (Woodham) albedo, by k-means on its chromaticity and brightness. 1 = shared by the object.
   int specular_clusters = 1;
+  // A known uniform albedo kd: what one or two images need (RecoverNormals).
+  std::optional<Vec3d> known_albedo;
 
   int threads = 0;
   // Called with the fraction done (0..1) from worker threads; must be thread-safe.
@@ -103,10 +106,17 @@ struct NormalResult {
   // One per cluster; ks, shininess and ambient_term above are the largest cluster's.
   std::vector<SpecularCluster> clusters;
   ImageF cluster_map;  // 1 channel: the cluster of each pixel, −1 outside (clusters > 1 only)
+  // One or two images only: the angle the data alone leaves open per pixel (few_images.h).
+  ImageF ambiguity_deg;
   NormalSummary summary;
 };
 
 // Throws std::invalid_argument for invalid data or options (one-line message).
 NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& options);
+
+// Any number of images: EstimateNormals for three or more; for one or two the global solver with
+// priors (EstimateNormalsFewImages), which needs the coefficients known (material_known) and
+// `known_albedo`; its albedo is then that kd inside the mask and ambiguity_deg is set.
+NormalResult RecoverNormals(const PhotometricData& data, const NormalOptions& options);
 
 }  // namespace iphong::solve

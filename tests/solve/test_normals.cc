@@ -292,6 +292,14 @@ TEST(Normals, BadInputGivesOneLineMessages) {
   two.values.resize(two.pixels.size() * 2 * 3);
   EXPECT_EQ(message(two, NormalOptions{}),
             "per-pixel photometric stereo needs at least 3 images, got 2");
+  // RecoverNormals takes two images to the global solver, which needs the albedo.
+  try {
+    RecoverNormals(two, NormalOptions{});
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(),
+                 "with 2 image(s) the coefficients must be known, kd (a uniform albedo) included");
+  }
   PhotometricData lights = s.data;
   lights.light_directions.pop_back();
   EXPECT_EQ(message(lights, NormalOptions{}), "4 images but 3 light directions and 4 intensities");
