@@ -413,6 +413,10 @@ struct SpecularFit {
   double cost = 0, cost_without_specular = 0;
 };
 
+// The range of the estimated shininess. At the lower end the lobe is as broad as the diffuse
+// term (EstimateSpecular treats that as not identifiable).
+constexpr double kMinShininess = 1.0, kMaxShininess = 1000.0;
+
 SpecularFit FitSpecular(const PhotometricData& data, const std::vector<std::size_t>& sample,
                         const std::vector<PixelSolution>& solutions, const NormalOptions& o,
                         const SpecularFit& start) {
@@ -448,8 +452,8 @@ SpecularFit FitSpecular(const PhotometricData& data, const std::vector<std::size
     problem.SetParameterLowerBound(ks, c, 0.0);
     problem.SetParameterLowerBound(ambient, c, 0.0);
   }
-  problem.SetParameterLowerBound(&log_n, 0, std::log(1.0));
-  problem.SetParameterUpperBound(&log_n, 0, std::log(1000.0));
+  problem.SetParameterLowerBound(&log_n, 0, std::log(kMinShininess));
+  problem.SetParameterUpperBound(&log_n, 0, std::log(kMaxShininess));
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
   solver_options.max_num_iterations = 50;
@@ -505,9 +509,9 @@ void EstimateSpecular(const PhotometricData& data, const std::vector<std::size_t
         "term";
     return;
   }
-  // At its lower bound the lobe is as broad as the diffuse term and trades places with it (seen
-  // on grazing-angle clusters): not a highlight either.
-  if (fit.shininess < 1.05) {
+  // At its lower bound the lobe trades places with the diffuse term (seen on grazing-angle
+  // clusters): not a highlight either.
+  if (fit.shininess < 1.05 * kMinShininess) {
     cluster->identifiable = false;
     cluster->note =
         "the specular lobe fitted as broad as the diffuse term (shininess 1): not identifiable";
