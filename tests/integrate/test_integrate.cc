@@ -364,9 +364,18 @@ TEST(Integrate, Seed003CylinderLineIntegral) {
     const Eigen::Vector2d n(x / radius, std::sqrt(1 - x * x) / radius);
     const double shading = light.normalized().dot(n);
     const auto both = solve::ProfileNormals(shading, light);
-    // The prior: the true branch is the one continuous with the normal seen at the centre
-    // (here: the one whose Nx has the sign of x).
-    normals.push_back(std::abs(both[0].x() - x) < std::abs(both[1].x() - x) ? both[0] : both[1]);
+    // Priors, not the truth: at the first sample only one solution faces the viewer (Nz > 0);
+    // after it the profile is smooth, so the branch continues the last two normals' trend.
+    Eigen::Vector2d expected;
+    if (normals.empty()) {
+      expected = Eigen::Vector2d(0, 1);
+    } else if (normals.size() == 1) {
+      expected = normals.back();
+    } else {
+      expected = 2 * normals.back() - normals[normals.size() - 2];
+    }
+    normals.push_back((both[0] - expected).norm() < (both[1] - expected).norm() ? both[0]
+                                                                                : both[1]);
     truth.push_back(std::sqrt(radius * radius - x * x));
   }
   const std::vector<double> heights = IntegrateProfile(normals, step);
