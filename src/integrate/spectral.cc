@@ -41,21 +41,29 @@ cv::Mat Divergence(const GridGradients& g, bool periodic) {
   return b;
 }
 
+// Divides each coefficient (row r, column c) of a spectrum by the Laplacian's eigenvalue
+// (2 − 2cos(a·c/w)) + (2 − 2cos(a·r/h)), a = π for the DCT-II, 2π for the DFT; the constant
+// mode (eigenvalue 0) is set to 0, which fixes the mean.
+template <typename Coefficient>
+void DivideByEigenvalues(cv::Mat& spectrum, double a) {
+  const int h = spectrum.rows, w = spectrum.cols;
+  std::vector<double> lx(w), ly(h);
+  for (int k = 0; k < w; ++k) lx[k] = 2 - 2 * std::cos(a * k / w);
+  for (int k = 0; k < h; ++k) ly[k] = 2 - 2 * std::cos(a * k / h);
+  for (int r = 0; r < h; ++r) {
+    auto* row = spectrum.ptr<Coefficient>(r);
+    for (int c = 0; c < w; ++c) {
+      const double lambda = lx[c] + ly[r];
+      row[c] = lambda > 0 ? row[c] * (1 / lambda) : Coefficient();
+    }
+  }
+}
+
 // Solves (graph Laplacian of the torus) f = b for b with zero sum; the result has zero mean.
 cv::Mat SolvePeriodic(const cv::Mat& b) {
   cv::Mat spectrum;
   cv::dft(b, spectrum, cv::DFT_COMPLEX_OUTPUT);
-  const int h = b.rows, w = b.cols;
-  std::vector<double> lx(w), ly(h);
-  for (int k = 0; k < w; ++k) lx[k] = 2 - 2 * std::cos(2 * M_PI * k / w);
-  for (int k = 0; k < h; ++k) ly[k] = 2 - 2 * std::cos(2 * M_PI * k / h);
-  for (int r = 0; r < h; ++r) {
-    auto* row = spectrum.ptr<cv::Vec2d>(r);
-    for (int c = 0; c < w; ++c) {
-      const double lambda = lx[c] + ly[r];
-      row[c] = lambda > 0 ? row[c] / lambda : cv::Vec2d(0, 0);
-    }
-  }
+  DivideByEigenvalues<cv::Vec2d>(spectrum, 2 * M_PI);
   cv::Mat f;
   cv::idft(spectrum, f, cv::DFT_REAL_OUTPUT | cv::DFT_SCALE);
   return f;
@@ -78,16 +86,7 @@ std::vector<double> SolveRectangleNeumann(const GridGradients& g) {
   if (w % 2 == 0 && h % 2 == 0) {
     cv::Mat spectrum;
     cv::dct(b, spectrum);
-    std::vector<double> lx(w), ly(h);
-    for (int k = 0; k < w; ++k) lx[k] = 2 - 2 * std::cos(M_PI * k / w);
-    for (int k = 0; k < h; ++k) ly[k] = 2 - 2 * std::cos(M_PI * k / h);
-    for (int r = 0; r < h; ++r) {
-      double* row = spectrum.ptr<double>(r);
-      for (int c = 0; c < w; ++c) {
-        const double lambda = lx[c] + ly[r];
-        row[c] = lambda > 0 ? row[c] / lambda : 0.0;
-      }
-    }
+    DivideByEigenvalues<double>(spectrum, M_PI);
     cv::Mat f;
     cv::idct(spectrum, f);
     return ToVector(f);
