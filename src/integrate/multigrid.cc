@@ -53,6 +53,19 @@ void BackwardGaussSeidel(const RowMatrix& a, const Eigen::VectorXd& inv_diag,
   }
 }
 
+// r = b − A x, written in place (Eigen's sparse product would allocate a temporary per cycle).
+void Residual(const RowMatrix& a, const Eigen::VectorXd& b, const Eigen::VectorXd& x,
+              Eigen::VectorXd* r) {
+  const int* outer = a.outerIndexPtr();
+  const int* inner = a.innerIndexPtr();
+  const double* value = a.valuePtr();
+  for (Eigen::Index i = 0; i < a.rows(); ++i) {
+    double s = b[i];
+    for (int k = outer[i]; k < outer[i + 1]; ++k) s -= value[k] * x[inner[k]];
+    (*r)[i] = s;
+  }
+}
+
 void Multiply(const RowMatrix& a, const Eigen::VectorXd& x, int threads, Eigen::VectorXd* y) {
   const int* outer = a.outerIndexPtr();
   const int* inner = a.innerIndexPtr();
@@ -169,7 +182,7 @@ void GridMultigrid::Cycle(std::size_t l) const {
   Level& coarse = *levels_[l + 1];
   level.x.setZero();
   ForwardGaussSeidel(level.a, level.inverse_diagonal, level.b, &level.x);
-  level.residual.noalias() = level.b - level.a * level.x;
+  Residual(level.a, level.b, level.x, &level.residual);
   coarse.b.setZero();
   for (Eigen::Index i = 0; i < level.b.size(); ++i) coarse.b[level.parent[i]] += level.residual[i];
   Cycle(l + 1);
