@@ -132,7 +132,10 @@ T SpecularLobe(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam, const Vec3T
     const Vec3T<T> reflect_cam = T(2) * n_dot_l * normal_cam - light_dir_cam;
     const T cosine = reflect_cam.dot(view_cam);
     if (!(cosine > T(0))) return T(0);
-    const T lambda = T(0.5) * (reflect_cam - view_cam).squaredNorm();
+    // λ feeds only the fast approximation; the exact power would waste a Jet product on it.
+    const T lambda = options.power == PowerMode::kFastApprox
+                         ? T(0.5) * (reflect_cam - view_cam).squaredNorm()
+                         : T(0);
     return LobePower(cosine, lambda, shininess, options);
   }
   // Blinn-Phong. L = −V leaves H undefined; no highlight can be seen there.
@@ -142,7 +145,9 @@ T SpecularLobe(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam, const Vec3T
   const Vec3T<T> half_cam = sum / sqrt(sum_norm2);
   const T cosine = normal_cam.dot(half_cam);
   if (!(cosine > T(0))) return T(0);
-  const T lambda = T(0.5) * (normal_cam - half_cam).squaredNorm();
+  const T lambda = options.power == PowerMode::kFastApprox
+                       ? T(0.5) * (normal_cam - half_cam).squaredNorm()
+                       : T(0);
   return LobePower(cosine, lambda, shininess, options);
 }
 

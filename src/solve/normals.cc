@@ -1,8 +1,6 @@
 #include "solve/normals.h"
 
 #include <ceres/ceres.h>
-#include <ceres/tiny_solver.h>
-#include <ceres/tiny_solver_autodiff_function.h>
 
 #include <algorithm>
 #include <atomic>
@@ -23,13 +21,6 @@ namespace iphong::solve {
 namespace {
 
 using Jet2 = ceres::Jet<double, 2>;
-
-// Two unit vectors completing n to an orthonormal basis.
-void Tangents(const Vec3d& n, Vec3d* t1, Vec3d* t2) {
-  const Vec3d a = std::abs(n.x()) < 0.9 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
-  *t1 = n.cross(a).normalized();
-  *t2 = n.cross(*t1);
-}
 
 enum class PixelStatus { kSolved, kDark, kUnderdetermined };
 
@@ -52,8 +43,11 @@ Eigen::Matrix3Xd PseudoInverse(const PhotometricData& data) {
   return ata.inverse() * l;
 }
 
+// `with_residual`: also the RMS residual of the Lambertian fit (needed only when Woodham's is the
+// answer; a start for the Phong fit gets its residual there).
 PixelSolution Woodham(const PhotometricData& data, std::size_t p, const NormalOptions& o,
-                      const Eigen::Matrix3Xd& pinv, std::vector<std::pair<double, int>>& order) {
+                      const Eigen::Matrix3Xd& pinv, std::vector<std::pair<double, int>>& order,
+                      bool with_residual) {
   const int k = data.images;
   const float* obs = data.pixel(p);
   order.clear();
@@ -117,6 +111,7 @@ PixelSolution Woodham(const PhotometricData& data, std::size_t p, const NormalOp
     den += Vec3d::Constant(nl * nl);
   }
   s.albedo = num.cwiseQuotient(den.cwiseMax(1e-12)).cwiseMax(0.0);
+  if (!with_residual) return s;
   // The residual of the Lambertian model Woodham fits, through the shared model.
   reflectance::Material lambertian;
   lambertian.kd = s.albedo;
@@ -136,90 +131,117 @@ PixelSolution Woodham(const PhotometricData& data, std::size_t p, const NormalOp
   return s;
 }
 
-// The per-pixel model with the albedo eliminated: residuals as a function of the normal only.
-// Observations are y = (I_j − Ia⊙ka)/E_j, which under the model equal kd·diffuse_j + ks·specular_j
-// per channel (reflectance::ShadingFactors). With `channels` = 1 they are reduced to their
-// luminance (exact under the model, since luminance is linear; a third of the residuals); with 3
-// each channel keeps its own albedo, which is more accurate on real photos whose colours depart
-// from the model.
-struct PixelCost {
+// The per-pixel problem with the albedo eliminated (variable projection): the residuals as a
+// function of the normal only. Observations are y = (I_j − Ia⊙ka)/E_j, which under the model
+// equal kd·diffuse_j + ks·specular_j per channel (reflectance::ShadingFactors). With `channels`
+// = 1 they are reduced to their luminance (exact under the model, since luminance is linear);
+// with 3 each channel keeps its own albedo, which is more accurate on real photos whose colours
+// depart from the model.
+//
+// Evaluate() runs the shared model once per light at a point of the tangent-plane chart, as
+// ceres::Jets in the two chart coordinates, and keeps those factors. Everything the fit needs
+// afterwards comes from them without running the model again: the weighted cost with its normal
+// equations for any weights (Reduce), the unweighted residuals for the robust weights, and the
+// final albedo and residual.
+struct PixelModel {
   const PhotometricData* data = nullptr;
   int channels = 3;
-  const double* y = nullptr;       // K × channels
-  const double* weight = nullptr;  // K, 0 for unused observations
-  Vec3d n0, t1, t2;                // tangent-plane chart: N = normalize(n0 + x0 t1 + x1 t2)
-  Vec3d ks = Vec3d::Zero();        // per channel (luminance in [0] when channels = 1)
+  const double* y = nullptr;  // K × channels
+  Vec3d ks = Vec3d::Zero();   // per channel (luminance in [0] when channels = 1)
   double shininess = 1;
   reflectance::ModelOptions model;
-  mutable std::vector<reflectance::LightFactors<double>> factors_d;  // reused between calls
-  mutable std::vector<reflectance::LightFactors<Jet2>> factors_j;
+  Vec3d n0, t1, t2;                                      // chart: N = normalize(n0 + x0 t1 + x1 t2)
+  std::vector<reflectance::LightFactors<Jet2>> factors;  // at the last evaluated point
 
-  int NumResiduals() const { return data->images * channels; }
-
-  template <typename T>
-  Vec3T<T> Normal(const T* x) const {
-    const Vec3T<T> n = n0.cast<T>() + x[0] * t1.cast<T>() + x[1] * t2.cast<T>();
-    return n / n.norm();
+  // Centres the chart on n (unit).
+  void Center(const Vec3d& n) {
+    n0 = n;
+    const Vec3d a = std::abs(n.x()) < 0.9 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
+    t1 = n.cross(a).normalized();
+    t2 = n.cross(t1);
   }
 
-  // Every light's factors at this normal, into the reused buffer of the scalar type.
-  template <typename T>
-  const std::vector<reflectance::LightFactors<T>>& Factors(const Vec3T<T>& normal) const {
-    std::vector<reflectance::LightFactors<T>>* f;
-    if constexpr (std::is_same_v<T, double>) {
-      f = &factors_d;
-    } else {
-      f = &factors_j;
-    }
-    f->resize(data->images);
-    const Vec3T<T> view = internal::ViewCam().cast<T>();
+  Vec3d Normal(const Eigen::Vector2d& x) const { return (n0 + x[0] * t1 + x[1] * t2).normalized(); }
+
+  void Evaluate(const Eigen::Vector2d& x) {
+    const Jet2 x0(x[0], 0), x1(x[1], 1);
+    const Vec3T<Jet2> raw = n0.cast<Jet2>() + x0 * t1.cast<Jet2>() + x1 * t2.cast<Jet2>();
+    const Vec3T<Jet2> normal = raw / raw.norm();
+    const Vec3T<Jet2> view = internal::ViewCam().cast<Jet2>();
+    const Jet2 n(shininess);
+    factors.resize(data->images);
     for (int j = 0; j < data->images; ++j) {
-      (*f)[j] = reflectance::ShadingFactors<T>(normal, view, data->light_directions[j].cast<T>(),
-                                               T(shininess), model);
+      factors[j] = reflectance::ShadingFactors<Jet2>(
+          normal, view, data->light_directions[j].cast<Jet2>(), n, model);
     }
-    return *f;
   }
 
-  template <typename T>
-  bool operator()(const T* x, T* residuals) const {
+  // The albedo of each channel eliminated with `weight`, as Jets (its dependence on the normal
+  // belongs to the Jacobian of the reduced problem).
+  std::array<Jet2, 3> Albedo(const double* weight) const {
+    return internal::EliminatedAlbedo<Jet2>(
+        factors, channels, [&](int c) { return ks[c]; },
+        [&](std::size_t j, int c) { return y[j * channels + c]; },
+        [&](std::size_t j) { return weight[j]; });
+  }
+
+  // Gauss–Newton normal equations of ½ Σ_j w_j Σ_c r_jc² with r = y − kd·diffuse − ks·specular,
+  // accumulated light by light instead of through a K·channels × 2 Jacobian.
+  struct NormalEquations {
+    double cost = 0;
+    Eigen::Matrix2d jtj = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d descent = Eigen::Vector2d::Zero();  // −Jᵀr
+  };
+  NormalEquations Reduce(const double* weight) const {
+    NormalEquations e;
     const int k = data->images;
-    const auto& f = Factors<T>(Normal(x));
+    const std::array<Jet2, 3> kd = Albedo(weight);
     for (int c = 0; c < channels; ++c) {
-      const auto y_c = [&](std::size_t j) { return T(y[j * channels + c]); };
-      const T kd =
-          internal::EliminatedAlbedo<T>(f, T(ks[c]), y_c, [&](std::size_t j) { return weight[j]; });
       for (int j = 0; j < k; ++j) {
-        residuals[j * channels + c] =
-            T(std::sqrt(weight[j])) * (y_c(j) - kd * f[j].diffuse - T(ks[c]) * f[j].specular);
+        if (weight[j] == 0) continue;
+        const Jet2 m = kd[c] * factors[j].diffuse + ks[c] * factors[j].specular;
+        const double r = y[j * channels + c] - m.a;
+        e.cost += 0.5 * weight[j] * r * r;
+        e.jtj.noalias() += weight[j] * m.v * m.v.transpose();
+        e.descent += weight[j] * r * m.v;
       }
     }
-    return true;
+    return e;
+  }
+
+  // Unweighted residuals at the last evaluated point, the albedo eliminated with `weight`.
+  void Residuals(const double* weight, double* out) const {
+    const std::array<Jet2, 3> kd = Albedo(weight);
+    for (int c = 0; c < channels; ++c) {
+      for (int j = 0; j < data->images; ++j) {
+        out[j * channels + c] =
+            y[j * channels + c] - kd[c].a * factors[j].diffuse.a - ks[c] * factors[j].specular.a;
+      }
+    }
   }
 };
-
-using PixelFunction = ceres::TinySolverAutoDiffFunction<PixelCost, Eigen::Dynamic, 2>;
 
 // Per-thread solver state: allocated once per chunk of pixels, never per pixel.
 struct PixelFitter {
   const PhotometricData& data;
   const NormalOptions& options;
   const Vec3d ks;
-  PixelCost cost;
-  PixelFunction function;
-  ceres::TinySolver<PixelFunction> solver;
+  PixelModel model, candidate;  // the current point and the trial step (swapped on acceptance)
   std::vector<double> y_rgb, y_lum, usable, weights, residuals;
   std::vector<std::pair<double, int>> order;
   NormalOptions darker;  // Woodham on the darker observations: the second start
 
   PixelFitter(const PhotometricData& d, const NormalOptions& o, const Vec3d& fit_ks,
               double shininess)
-      : data(d), options(o), ks(fit_ks), cost(MakeCost(d, o, fit_ks, shininess)), function(cost) {
-    solver.options.max_num_iterations = o.max_iterations;
-    // 1e-8 of the chart is ~1e-6 degrees: far below any useful precision, and it saves the
-    // iterations that only polish noise.
-    solver.options.parameter_tolerance = 1e-8;
-    solver.options.function_tolerance = 1e-8;
-    solver.options.gradient_tolerance = 1e-12;
+      : data(d), options(o), ks(fit_ks) {
+    model.data = &d;
+    model.channels = o.color_residuals ? 3 : 1;
+    model.ks = o.color_residuals ? ks : Vec3d(internal::Luminance(ks), 0, 0);
+    model.shininess = shininess;
+    // No specular coefficient means no specular term: the Lambertian model, not a zero lobe.
+    model.model.lobe = ks.isZero() ? reflectance::Lobe::kLambert : o.model;
+    model.factors.reserve(d.images);
+    candidate = model;
     y_rgb.resize(3 * d.images);
     y_lum.resize(d.images);
     usable.resize(d.images);
@@ -231,25 +253,13 @@ struct PixelFitter {
     residuals.resize(3 * d.images);
   }
 
-  static PixelCost MakeCost(const PhotometricData& d, const NormalOptions& o, const Vec3d& ks,
-                            double shininess) {
-    PixelCost c;
-    c.data = &d;
-    c.channels = o.color_residuals ? 3 : 1;
-    c.ks = o.color_residuals ? ks : Vec3d(internal::Luminance(ks), 0, 0);
-    c.shininess = shininess;
-    // No specular coefficient means no specular term: the Lambertian model, not a zero lobe.
-    c.model.lobe = ks.isZero() ? reflectance::Lobe::kLambert : o.model;
-    return c;
-  }
-
   // Refines `s` (from Woodham); where the fit leaves more than `restart_residual` of the pixel's
   // brightness unexplained, it also starts from Woodham on the darker observations (highlights
   // bias the first start toward a local minimum) and keeps the better of the two.
   void FitWithRestart(std::size_t p, PixelSolution& s) {
     Fit(p, s);
     if (!(s.residual > options.restart_residual * MeanObservation(p))) return;
-    PixelSolution second = Woodham(data, p, darker, Eigen::Matrix3Xd(), order);
+    PixelSolution second = Woodham(data, p, darker, Eigen::Matrix3Xd(), order, false);
     if (second.status != PixelStatus::kSolved) return;
     // A start already near the solution (within 2 degrees) would converge to the same place.
     if (second.normal.dot(s.normal) > std::cos(2.0 * M_PI / 180)) return;
@@ -267,6 +277,47 @@ struct PixelFitter {
     double sum = 0;
     for (int i = 0; i < 3 * data.images; ++i) sum += obs[i];
     return std::max(sum / (3 * data.images), 1e-9);
+  }
+
+  // Levenberg–Marquardt on the two chart coordinates with fixed weights, from x (updated in
+  // place; `model` holds the factors at x on entry and on return). The damping follows
+  // ceres::TinySolver; unlike it, every trial point is evaluated with its derivatives, so an
+  // accepted step costs one run of the model, not two.
+  int Minimize(Eigen::Vector2d& x) {
+    // A relative cost change below this leaves the normal within ~1e-3 σ/kd of the optimum, far
+    // inside the noise (on DiLiGenT cat 1e-12 spends twice the iterations for the same figures).
+    const double kCostTolerance = 1e-6;
+    PixelModel::NormalEquations eq = model.Reduce(weights.data());
+    double u = 1e-4, v = 2;
+    int iterations = 0;
+    for (; iterations < options.max_iterations; ++iterations) {
+      Eigen::Matrix2d damped = eq.jtj;
+      for (int i = 0; i < 2; ++i) damped(i, i) += u * std::clamp(eq.jtj(i, i), 1e-6, 1e32);
+      const Eigen::Vector2d step = damped.ldlt().solve(eq.descent);
+      // 1e-8 of the chart is ~1e-6 degrees: far below any useful precision, and stopping there
+      // saves the iterations that only polish noise.
+      if (!step.allFinite() || step.norm() < 1e-8) break;
+      const Eigen::Vector2d x_new = x + step;
+      candidate.Evaluate(x_new);
+      const PixelModel::NormalEquations eq_new = candidate.Reduce(weights.data());
+      const double change = eq.cost - eq_new.cost;
+      const double predicted = step.dot(eq.descent - 0.5 * eq.jtj * step);
+      const double rho = change / predicted;
+      if (rho > 0) {
+        x = x_new;
+        std::swap(model.factors, candidate.factors);
+        eq = eq_new;
+        if (std::abs(change) < kCostTolerance * eq.cost) break;
+        const double t = 2 * rho - 1;
+        u *= std::max(1.0 / 3, 1 - t * t * t);
+        v = 2;
+      } else {
+        if (std::abs(change) < kCostTolerance * eq.cost) break;
+        u *= v;
+        v *= 2;
+      }
+    }
+    return iterations;
   }
 
   // Refines `s` (from Woodham) in place. Buffers are the fitter's: nothing is allocated here.
@@ -287,79 +338,77 @@ struct PixelFitter {
         ++count;
       }
     }
-    if (count < 3) return;  // keep Woodham's answer
+    if (count < 3) {  // too few unsaturated observations to fit: Woodham's answer stays
+      const int iterations = s.iterations;
+      s = Woodham(data, p, options, Eigen::Matrix3Xd(), order, true);
+      s.iterations = iterations;
+      return;
+    }
     const double scale = options.robust_scale * std::max(mean / count, 1e-6);
-    cost.y = cost.channels == 1 ? y_lum.data() : y_rgb.data();
+    model.y = candidate.y = model.channels == 1 ? y_lum.data() : y_rgb.data();
     weights = usable;
+    model.Center(s.normal);
+    candidate.n0 = model.n0, candidate.t1 = model.t1, candidate.t2 = model.t2;
+    Eigen::Vector2d x = Eigen::Vector2d::Zero();
+    model.Evaluate(x);
+    const int ch = model.channels;
     Vec3d normal = s.normal;
     for (int round = 0; round < options.irls_rounds; ++round) {
-      cost.weight = weights.data();
-      cost.n0 = normal;
-      Tangents(normal, &cost.t1, &cost.t2);
-      Eigen::Vector2d x = Eigen::Vector2d::Zero();
-      const auto summary = solver.Solve(function, &x);
-      s.iterations += summary.iterations;
+      s.iterations += Minimize(x);
       const Vec3d previous = normal;
-      normal = cost.Normal(x.data());
+      normal = model.Normal(x);
       // Reweighting can no longer move a normal that moved less than 0.01 degrees.
       if (round > 0 && previous.dot(normal) > std::cos(1e-2 * M_PI / 180)) break;
       // Cauchy weights from the unweighted residuals of the usable observations, at the new
-      // normal (x = 0 once the chart is re-centred there).
-      cost.n0 = normal;
-      Tangents(normal, &cost.t1, &cost.t2);
-      cost.weight = usable.data();
-      const double zero[2] = {0, 0};
-      cost(zero, residuals.data());
-      // One weight per image: a cast shadow or highlight affects every channel.
-      const int ch = cost.channels;
+      // normal: one weight per image, since a cast shadow or highlight affects every channel.
+      model.Residuals(usable.data(), residuals.data());
       for (int j = 0; j < k; ++j) {
         double r2 = 0;
         for (int c = 0; c < ch; ++c) r2 += std::pow(residuals[j * ch + c] / scale, 2);
         weights[j] = usable[j] / (1.0 + r2 / ch);
       }
+      // A chart far from its centre bends; re-centre it (the factors' derivatives change).
+      if (x.norm() > 0.25 && round + 1 < options.irls_rounds) {
+        model.Center(normal);
+        candidate.n0 = model.n0, candidate.t1 = model.t1, candidate.t2 = model.t2;
+        x.setZero();
+        model.Evaluate(x);
+      }
     }
     s.normal = normal;
     // The robust cost at the final normal, same σ for every start of this pixel.
-    cost.n0 = normal;
-    Tangents(normal, &cost.t1, &cost.t2);
-    cost.weight = usable.data();
-    const double zero[2] = {0, 0};
-    cost(zero, residuals.data());
+    model.Residuals(usable.data(), residuals.data());
     s.robust_cost = 0;
-    for (int i = 0; i < k * cost.channels; ++i) {
-      s.robust_cost += std::log1p(std::pow(residuals[i] / scale, 2));
-    }
-    AlbedoAndResidual(obs, normal, s);
+    for (int i = 0; i < k * ch; ++i) s.robust_cost += std::log1p(std::pow(residuals[i] / scale, 2));
+    AlbedoAndResidual(obs, s);
   }
 
   // The RGB albedo, eliminated as in the fit with its final weights, and the RMS difference
-  // between the observations and the shared model (LightTerm) over the usable ones.
-  void AlbedoAndResidual(const float* obs, const Vec3d& normal, PixelSolution& s) {
+  // between the observations and the model (Ia⊙ka + E⊙(kd·diffuse + ks·specular), the factors
+  // of the shared model at the final normal) over the usable ones.
+  void AlbedoAndResidual(const float* obs, PixelSolution& s) {
     const int k = data.images;
-    const auto& f = cost.Factors<double>(normal);
-    for (int c = 0; c < 3; ++c) {
-      s.albedo[c] = internal::EliminatedAlbedo<double>(
-          f, ks[c], [&](std::size_t j) { return y_rgb[3 * j + c]; },
-          [&](std::size_t j) { return weights[j]; });
-    }
-    reflectance::Material material;
-    material.kd = s.albedo;
-    material.ks = ks;
-    material.shininess = cost.shininess;
+    std::vector<reflectance::LightFactors<double>>& f = values;
+    f.resize(k);
+    for (int j = 0; j < k; ++j) f[j] = {model.factors[j].diffuse.a, model.factors[j].specular.a};
+    const std::array<double, 3> kd = internal::EliminatedAlbedo<double>(
+        f, 3, [&](int c) { return ks[c]; }, [&](std::size_t j, int c) { return y_rgb[3 * j + c]; },
+        [&](std::size_t j) { return weights[j]; });
+    s.albedo = Vec3d(kd[0], kd[1], kd[2]);
     double sq = 0;
     int used = 0;
     for (int j = 0; j < k; ++j) {
       if (usable[j] == 0) continue;
-      const Vec3d& e = data.light_intensities[j];
       const Vec3d predicted =
-          options.ambient_term + reflectance::LightTerm<double>(normal, internal::ViewCam(),
-                                                                data.light_directions[j], e, e,
-                                                                material, cost.model);
+          options.ambient_term +
+          data.light_intensities[j].cwiseProduct(s.albedo * f[j].diffuse + ks * f[j].specular);
       sq += (Vec3d(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]) - predicted).squaredNorm();
       used += 3;
     }
     s.residual = std::sqrt(sq / std::max(used, 1));
   }
+
+  std::vector<reflectance::LightFactors<double>> values;  // the factors' values, reused
 };
 
 // Global fit of ks (RGB), log-shininess and the ambient term Ia⊙ka (RGB) over sampled pixels,
@@ -391,15 +440,15 @@ struct SpecularCost {
                                                shininess, model);
     }
     const float* obs = data->pixel(p);
+    const auto y = [&](std::size_t j, int c) {
+      return (T(obs[3 * j + c]) - ambient[c]) / T(data->light_intensities[j][c]);
+    };
+    const std::array<T, 3> kd = internal::EliminatedAlbedo<T>(
+        *f, 3, [&](int c) { return ks[c]; }, y, [&](std::size_t j) { return weight[j]; });
     for (int c = 0; c < 3; ++c) {
-      const auto y = [&](std::size_t j) {
-        return (T(obs[3 * j + c]) - ambient[c]) / T(data->light_intensities[j][c]);
-      };
-      const T kd =
-          internal::EliminatedAlbedo<T>(*f, ks[c], y, [&](std::size_t j) { return weight[j]; });
       for (int j = 0; j < k; ++j) {
-        residuals[3 * j + c] =
-            T(std::sqrt(weight[j])) * (y(j) - kd * (*f)[j].diffuse - ks[c] * (*f)[j].specular);
+        residuals[3 * j + c] = T(std::sqrt(weight[j])) *
+                               (y(j, c) - kd[c] * (*f)[j].diffuse - ks[c] * (*f)[j].specular);
       }
     }
     return true;
@@ -622,16 +671,17 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
   result.model = options.model;
   result.summary.pixels = pixels;
 
+  const bool nonlinear = options.model != reflectance::Lobe::kLambert;
   auto start = Clock::now();
   const Eigen::Matrix3Xd pinv = PseudoInverse(data);
   ParallelFor(0, pixels, 1024, options.threads, [&](std::size_t b, std::size_t e) {
     std::vector<std::pair<double, int>> order;
     order.reserve(data.images);
-    for (std::size_t p = b; p < e; ++p) solutions[p] = Woodham(data, p, options, pinv, order);
+    for (std::size_t p = b; p < e; ++p)
+      solutions[p] = Woodham(data, p, options, pinv, order, !nonlinear);
   });
   result.summary.init_seconds = SecondsSince(start);
 
-  const bool nonlinear = options.model != reflectance::Lobe::kLambert;
   // Clusters of the albedo (one: the whole object) and their specular coefficients.
   std::vector<int> cluster_of(pixels, 0);
   int clusters = 1;

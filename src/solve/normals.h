@@ -4,10 +4,12 @@
 // 1. Woodham's Lambertian least squares per pixel on the luminance of I_j / E_j, using the
 //    observations left after dropping the darkest and brightest fractions (shadows, highlights).
 //    This is also the `lambert` result.
-// 2. A per-pixel nonlinear fit of the Phong (or Blinn-Phong) model with ceres::TinySolver and
-//    autodiff. The unknowns are 2: the normal on a tangent-plane chart around the current estimate
-//    (re-centred every round, so the chart never degenerates). The RGB albedo is linear in the
-//    residuals and eliminated in closed form inside the functor (variable projection). Cauchy
+// 2. A per-pixel nonlinear fit of the Phong (or Blinn-Phong) model: Levenberg–Marquardt with
+//    ceres::Jet autodiff through the shared model. The unknowns are 2: the normal on a
+//    tangent-plane chart around the Woodham estimate (re-centred when the fit strays from it, so
+//    the chart never degenerates). The RGB albedo is linear in the residuals and eliminated in
+//    closed form (variable projection). The model runs once per light and trial point; the
+//    normal equations, robust weights, albedo and residual are all drawn from that run. Cauchy
 //    weights (iteratively reweighted, one per image) absorb cast shadows and interreflections;
 //    attached shadows are in the model (N·L ≤ 0 gives the ambient value); saturated observations
 //    are dropped. Where the residual stays large, a second start from Woodham on the darker
