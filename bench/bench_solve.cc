@@ -47,9 +47,10 @@ const solve::PhotometricData& Data() {
   return data;
 }
 
-void Run(benchmark::State& state, reflectance::Lobe model) {
+void Run(benchmark::State& state, reflectance::Lobe model, bool color_residuals = true) {
   solve::NormalOptions o;
   o.model = model;
+  o.color_residuals = color_residuals;
   o.material_known = true;
   o.ks = Vec3d::Constant(0.4);
   o.shininess = 20;
@@ -67,10 +68,18 @@ void Run(benchmark::State& state, reflectance::Lobe model) {
 
 void BM_Woodham100k(benchmark::State& s) { Run(s, reflectance::Lobe::kLambert); }
 void BM_Phong100k(benchmark::State& s) { Run(s, reflectance::Lobe::kPhong); }
+// `--fast`: the normal fitted to the luminance (one residual per light instead of three).
+void BM_Phong100kLuminance(benchmark::State& s) { Run(s, reflectance::Lobe::kPhong, false); }
 BENCHMARK(BM_Woodham100k)->ArgName("threads")->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Phong100k)
     ->ArgName("threads")
     ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1);
+BENCHMARK(BM_Phong100kLuminance)
+    ->ArgName("threads")
     ->Arg(2)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()

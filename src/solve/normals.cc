@@ -29,7 +29,6 @@ struct PixelSolution {
   Vec3d normal = Vec3d(0, 0, 1);
   Vec3d albedo = Vec3d::Zero();
   double residual = -1;
-  double robust_cost = 0;  // Σ log(1 + (r/σ)²) of the luminance residuals, for choosing a start
   int iterations = 0;
 };
 
@@ -196,16 +195,25 @@ struct PixelModel {
     NormalEquations e;
     const int k = data->images;
     const std::array<Jet2, 3> kd = Albedo(weight);
-    for (int c = 0; c < channels; ++c) {
-      for (int j = 0; j < k; ++j) {
-        if (weight[j] == 0) continue;
+    // JᵀJ is symmetric: three sums, filled in at the end.
+    double cost = 0, h00 = 0, h01 = 0, h11 = 0, g0 = 0, g1 = 0;
+    for (int j = 0; j < k; ++j) {
+      const double w = weight[j];
+      if (w == 0) continue;
+      for (int c = 0; c < channels; ++c) {
         const Jet2 m = kd[c] * factors[j].diffuse + ks[c] * factors[j].specular;
-        const double r = y[j * channels + c] - m.a;
-        e.cost += 0.5 * weight[j] * r * r;
-        e.jtj.noalias() += weight[j] * m.v * m.v.transpose();
-        e.descent += weight[j] * r * m.v;
+        const double r = y[j * channels + c] - m.a, v0 = w * m.v[0], v1 = w * m.v[1];
+        cost += w * r * r;
+        h00 += v0 * m.v[0];
+        h01 += v0 * m.v[1];
+        h11 += v1 * m.v[1];
+        g0 += v0 * r;
+        g1 += v1 * r;
       }
     }
+    e.cost = 0.5 * cost;
+    e.jtj << h00, h01, h01, h11;
+    e.descent << g0, g1;
     return e;
   }
 
@@ -229,6 +237,7 @@ struct PixelFitter {
   PixelModel model, candidate;  // the current point and the trial step (swapped on acceptance)
   std::vector<double> y_rgb, y_lum, usable, weights, residuals;
   std::vector<std::pair<double, int>> order;
+  double scale = 1;      // the Cauchy scale σ of the pixel being fitted
   NormalOptions darker;  // Woodham on the darker observations: the second start
 
   PixelFitter(const PhotometricData& d, const NormalOptions& o, const Vec3d& fit_ks,
@@ -263,10 +272,11 @@ struct PixelFitter {
     if (second.status != PixelStatus::kSolved) return;
     // A start already near the solution (within 2 degrees) would converge to the same place.
     if (second.normal.dot(s.normal) > std::cos(2.0 * M_PI / 180)) return;
+    const double first_cost = RobustCost();  // before the second fit replaces the factors
     second.iterations = 0;
     Fit(p, second);
     s.iterations += second.iterations;
-    if (second.robust_cost < s.robust_cost) {
+    if (RobustCost() < first_cost) {
       second.iterations = s.iterations;
       s = second;
     }
@@ -344,7 +354,7 @@ struct PixelFitter {
       s.iterations = iterations;
       return;
     }
-    const double scale = options.robust_scale * std::max(mean / count, 1e-6);
+    scale = options.robust_scale * std::max(mean / count, 1e-6);
     model.y = candidate.y = model.channels == 1 ? y_lum.data() : y_rgb.data();
     weights = usable;
     model.Center(s.normal);
@@ -376,11 +386,18 @@ struct PixelFitter {
       }
     }
     s.normal = normal;
-    // The robust cost at the final normal, same σ for every start of this pixel.
-    model.Residuals(usable.data(), residuals.data());
-    s.robust_cost = 0;
-    for (int i = 0; i < k * ch; ++i) s.robust_cost += std::log1p(std::pow(residuals[i] / scale, 2));
     AlbedoAndResidual(obs, s);
+  }
+
+  // Σ log(1 + (r/σ)²) over the usable observations at the last fit's normal, with that pixel's
+  // σ: what chooses between two starts.
+  double RobustCost() {
+    model.Residuals(usable.data(), residuals.data());
+    double cost = 0;
+    for (int i = 0; i < data.images * model.channels; ++i) {
+      cost += std::log1p(std::pow(residuals[i] / scale, 2));
+    }
+    return cost;
   }
 
   // The RGB albedo, eliminated as in the fit with its final weights, and the RMS difference
