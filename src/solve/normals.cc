@@ -451,14 +451,35 @@ struct SpecularCost {
     const int k = data->images;
     f->resize(k);
     const T shininess = exp(log_n[0]);
-    const Vec3T<T> n = normal.cast<T>(), view = internal::ViewCam().cast<T>();
+    // With the normal fixed the factors depend on the parameters only through the shininess: the
+    // model runs on one-derivative Jets in n, and the chain rule carries d/dn to the parameters
+    // (7 derivatives per operation would be spent on zeros).
+    using Jet1 = ceres::Jet<double, 1>;
+    double n_value;
+    if constexpr (std::is_same_v<T, double>) {
+      n_value = shininess;
+    } else {
+      n_value = shininess.a;
+    }
+    const auto chain = [&](const Jet1& x) {
+      if constexpr (std::is_same_v<T, double>) {
+        return x.a;
+      } else {
+        T out(x.a);
+        out.v = x.v[0] * shininess.v;
+        return out;
+      }
+    };
+    const Vec3T<Jet1> n = normal.cast<Jet1>(), view = internal::ViewCam().cast<Jet1>();
     for (int j = 0; j < k; ++j) {
-      (*f)[j] = reflectance::ShadingFactors<T>(n, view, data->light_directions[j].cast<T>(),
-                                               shininess, model);
+      const reflectance::LightFactors<Jet1> f1 = reflectance::ShadingFactors<Jet1>(
+          n, view, data->light_directions[j].cast<Jet1>(), Jet1(n_value, 0), model);
+      (*f)[j] = {chain(f1.diffuse), chain(f1.specular)};
     }
     const float* obs = data->pixel(p);
     const auto y = [&](std::size_t j, int c) {
-      return (T(obs[3 * j + c]) - ambient[c]) / T(data->light_intensities[j][c]);
+      const double inverse_e = 1.0 / data->light_intensities[j][c];
+      return (static_cast<double>(obs[3 * j + c]) - ambient[c]) * inverse_e;
     };
     const std::array<T, 3> kd = internal::EliminatedAlbedo<T>(
         *f, 3, [&](int c) { return ks[c]; }, y, [&](std::size_t j) { return weight[j]; });
