@@ -34,6 +34,7 @@ struct NormalsCommandOptions {
   bool fast = false;
   bool integrate = false;
   int specular_clusters = 1;
+  bool uniform_specular = false;
   int threads = 0;
 };
 
@@ -66,6 +67,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   options.irls_rounds = o.irls_rounds;
   options.color_residuals = !o.fast;
   options.specular_clusters = o.specular_clusters;
+  options.varying_specular = !o.uniform_specular;
   if (dataset.material && !o.ignore_material) {
     options.model = dataset.material->model;
     options.material_known = true;
@@ -129,6 +131,8 @@ void RunNormals(const NormalsCommandOptions& o) {
                  {16, io::Encoding::kLinear});
   io::WriteImage(out.file("albedo.exr"), result.albedo);
   io::WriteImage(out.file("residual.exr"), result.residual);
+  const bool specular_map = result.material_estimated && !result.specular.pixels.empty();
+  if (specular_map) io::WriteImage(out.file("specular.exr"), result.specular);
   if (!ambiguity.pixels.empty()) io::WriteImage(out.file("ambiguity.exr"), ambiguity);
   if (!result.cluster_map.pixels.empty())
     io::WriteImage(out.file("clusters.exr"), result.cluster_map);
@@ -233,9 +237,10 @@ void RunNormals(const NormalsCommandOptions& o) {
         surface->consistency_mean_deg, surface->triangles);
   }
   std::printf(
-      "Wrote %s: normals.exr, normals.png, albedo.exr, residual.exr, metrics.json%s%s%s%s%s\n",
+      "Wrote %s: normals.exr, normals.png, albedo.exr, residual.exr, metrics.json%s%s%s%s%s%s\n",
       o.output_dir.c_str(), result.material_estimated ? ", material.json" : "",
-      errors ? ", error.png" : "", ambiguity.pixels.empty() ? "" : ", ambiguity.exr",
+      specular_map ? ", specular.exr" : "", errors ? ", error.png" : "",
+      ambiguity.pixels.empty() ? "" : ", ambiguity.exr",
       result.cluster_map.pixels.empty() ? "" : ", clusters.exr",
       surface ? ", height.exr, mesh.ply, height.png, integrate.json" : "");
 }
@@ -316,6 +321,10 @@ void AddNormalsCommand(CLI::App& app) {
                   "materials); 1 = shared by the object")
       ->check(CLI::Range(1, 16))
       ->capture_default_str();
+  cmd->add_flag(
+      "--uniform-specular", o->uniform_specular,
+      "Estimated coefficients: one ks per cluster everywhere, instead of scaled per pixel "
+      "(specular.exr)");
   cmd->add_flag("--integrate", o->integrate,
                 "Also integrate the normals: height.exr, mesh.ply (albedo colours), height.png");
   cmd->add_option("--threads", o->threads, "Threads (0 = all cores)")

@@ -22,21 +22,48 @@ inline double Luminance(const Vec3d& rgb) {
 //   kd_c = (Σ w d y_c − ks_c Σ w d s) / Σ w d²,
 // in one pass over the lights. y(j, c) is observation j of channel c (a plain number or a T),
 // ks(c) the channel's specular coefficient, weight(j) the observation's weight.
+// With `specular_scale`, ks is scaled by one more unknown σ ≥ 0 shared by the channels, found in
+// the same pass: substituting kd_c(σ) leaves a linear equation in σ,
+//   σ Σ_c ks_c² (S − X²/D) = Σ_c ks_c (B_c − A_c X/D),
+// with D = Σ w d², X = Σ w d s, S = Σ w s², A_c = Σ w d y_c, B_c = Σ w s y_c.
 template <typename T, typename Ks, typename Y, typename Weight>
 std::array<T, 3> EliminatedAlbedo(const std::vector<reflectance::LightFactors<T>>& factors,
-                                  int channels, Ks ks, Y y, Weight weight) {
-  T den = T(0), cross = T(0);
-  std::array<T, 3> kd = {T(0), T(0), T(0)};  // Σ w d y_c until the end
+                                  int channels, Ks ks, Y y, Weight weight,
+                                  T* specular_scale = nullptr) {
+  T d = T(0), x = T(0), s = T(0);
+  std::array<T, 3> a = {T(0), T(0), T(0)}, b = {T(0), T(0), T(0)};
   for (std::size_t j = 0; j < factors.size(); ++j) {
     const double w = weight(j);
     if (w == 0) continue;
     const T wd = w * factors[j].diffuse;
-    den += wd * factors[j].diffuse;
-    cross += wd * factors[j].specular;
-    for (int c = 0; c < channels; ++c) kd[c] += wd * y(j, c);
+    d += wd * factors[j].diffuse;
+    x += wd * factors[j].specular;
+    for (int c = 0; c < channels; ++c) a[c] += wd * y(j, c);
+    if (specular_scale) {
+      const T ws = w * factors[j].specular;
+      s += ws * factors[j].specular;
+      for (int c = 0; c < channels; ++c) b[c] += ws * y(j, c);
+    }
   }
+  if (!(d > T(1e-12))) {
+    if (specular_scale) *specular_scale = T(1);
+    return {T(0), T(0), T(0)};
+  }
+  T sigma = T(1);
+  if (specular_scale) {
+    T num = T(0), den = T(0);
+    for (int c = 0; c < channels; ++c) {
+      num += ks(c) * (b[c] - a[c] * x / d);
+      den += ks(c) * ks(c) * (s - x * x / d);
+    }
+    // No lobe in sight (den ≈ 0) leaves σ free: keep the estimated strength.
+    sigma = den > T(1e-12) ? num / den : T(1);
+    if (sigma < T(0)) sigma = T(0);
+    *specular_scale = sigma;
+  }
+  std::array<T, 3> kd = {T(0), T(0), T(0)};
   for (int c = 0; c < channels; ++c) {
-    kd[c] = den > T(1e-12) ? (kd[c] - ks(c) * cross) / den : T(0);
+    kd[c] = (a[c] - sigma * ks(c) * x) / d;
     if (kd[c] < T(0)) kd[c] = T(0);
   }
   return kd;

@@ -28,6 +28,7 @@ struct PixelSolution {
   PixelStatus status = PixelStatus::kSolved;
   Vec3d normal = Vec3d(0, 0, 1);
   Vec3d albedo = Vec3d::Zero();
+  double specular_scale = 1;  // σ: this pixel's ks is σ times its cluster's
   double residual = -1;
   int iterations = 0;
 };
@@ -145,8 +146,9 @@ PixelSolution Woodham(const PhotometricData& data, std::size_t p, const NormalOp
 struct PixelModel {
   const PhotometricData* data = nullptr;
   int channels = 3;
-  const double* y = nullptr;  // K × channels
-  Vec3d ks = Vec3d::Zero();   // per channel (luminance in [0] when channels = 1)
+  const double* y = nullptr;         // K × channels
+  Vec3d ks = Vec3d::Zero();          // per channel (luminance in [0] when channels = 1)
+  bool free_specular_scale = false;  // ks scaled per pixel by σ ≥ 0, eliminated like kd
   double shininess = 1;
   reflectance::ModelOptions model;
   Vec3d n0, t1, t2;                                      // chart: N = normalize(n0 + x0 t1 + x1 t2)
@@ -175,13 +177,15 @@ struct PixelModel {
     }
   }
 
-  // The albedo of each channel eliminated with `weight`, as Jets (its dependence on the normal
-  // belongs to the Jacobian of the reduced problem).
-  std::array<Jet2, 3> Albedo(const double* weight) const {
+  // The albedo of each channel and the specular scale σ (1 unless free) eliminated with
+  // `weight`, as Jets (their dependence on the normal belongs to the Jacobian of the reduced
+  // problem).
+  std::array<Jet2, 3> Albedo(const double* weight, Jet2* sigma) const {
+    *sigma = Jet2(1.0);
     return internal::EliminatedAlbedo<Jet2>(
         factors, channels, [&](int c) { return ks[c]; },
         [&](std::size_t j, int c) { return y[j * channels + c]; },
-        [&](std::size_t j) { return weight[j]; });
+        [&](std::size_t j) { return weight[j]; }, free_specular_scale ? sigma : nullptr);
   }
 
   // Gauss–Newton normal equations of ½ Σ_j w_j Σ_c r_jc² with r = y − kd·diffuse − ks·specular,
@@ -194,14 +198,15 @@ struct PixelModel {
   NormalEquations Reduce(const double* weight) const {
     NormalEquations e;
     const int k = data->images;
-    const std::array<Jet2, 3> kd = Albedo(weight);
+    Jet2 sigma;
+    const std::array<Jet2, 3> kd = Albedo(weight, &sigma);
     // JᵀJ is symmetric: three sums, filled in at the end.
     double cost = 0, h00 = 0, h01 = 0, h11 = 0, g0 = 0, g1 = 0;
     for (int j = 0; j < k; ++j) {
       const double w = weight[j];
       if (w == 0) continue;
       for (int c = 0; c < channels; ++c) {
-        const Jet2 m = kd[c] * factors[j].diffuse + ks[c] * factors[j].specular;
+        const Jet2 m = kd[c] * factors[j].diffuse + (ks[c] * sigma) * factors[j].specular;
         const double r = y[j * channels + c] - m.a, v0 = w * m.v[0], v1 = w * m.v[1];
         cost += w * r * r;
         h00 += v0 * m.v[0];
@@ -219,11 +224,12 @@ struct PixelModel {
 
   // Unweighted residuals at the last evaluated point, the albedo eliminated with `weight`.
   void Residuals(const double* weight, double* out) const {
-    const std::array<Jet2, 3> kd = Albedo(weight);
+    Jet2 sigma;
+    const std::array<Jet2, 3> kd = Albedo(weight, &sigma);
     for (int c = 0; c < channels; ++c) {
       for (int j = 0; j < data->images; ++j) {
-        out[j * channels + c] =
-            y[j * channels + c] - kd[c].a * factors[j].diffuse.a - ks[c] * factors[j].specular.a;
+        out[j * channels + c] = y[j * channels + c] - kd[c].a * factors[j].diffuse.a -
+                                sigma.a * ks[c] * factors[j].specular.a;
       }
     }
   }
@@ -249,6 +255,7 @@ struct PixelFitter {
     model.shininess = shininess;
     // No specular coefficient means no specular term: the Lambertian model, not a zero lobe.
     model.model.lobe = ks.isZero() ? reflectance::Lobe::kLambert : o.model;
+    model.free_specular_scale = o.varying_specular && !o.material_known && !ks.isZero();
     model.factors.reserve(d.images);
     candidate = model;
     y_rgb.resize(3 * d.images);
@@ -408,17 +415,19 @@ struct PixelFitter {
     std::vector<reflectance::LightFactors<double>>& f = values;
     f.resize(k);
     for (int j = 0; j < k; ++j) f[j] = {model.factors[j].diffuse.a, model.factors[j].specular.a};
+    double sigma = 1;
     const std::array<double, 3> kd = internal::EliminatedAlbedo<double>(
         f, 3, [&](int c) { return ks[c]; }, [&](std::size_t j, int c) { return y_rgb[3 * j + c]; },
-        [&](std::size_t j) { return weights[j]; });
+        [&](std::size_t j) { return weights[j]; }, model.free_specular_scale ? &sigma : nullptr);
     s.albedo = Vec3d(kd[0], kd[1], kd[2]);
+    s.specular_scale = sigma;
     double sq = 0;
     int used = 0;
     for (int j = 0; j < k; ++j) {
       if (usable[j] == 0) continue;
       const Vec3d predicted =
-          options.ambient_term +
-          data.light_intensities[j].cwiseProduct(s.albedo * f[j].diffuse + ks * f[j].specular);
+          options.ambient_term + data.light_intensities[j].cwiseProduct(s.albedo * f[j].diffuse +
+                                                                        sigma * ks * f[j].specular);
       sq += (Vec3d(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]) - predicted).squaredNorm();
       used += 3;
     }
@@ -812,6 +821,7 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
   result.normals = ImageF(data.width, data.height, 3);
   result.albedo = ImageF(data.width, data.height, 3);
   result.residual = ImageF(data.width, data.height, 1);
+  if (nonlinear) result.specular = ImageF(data.width, data.height, 3);
   for (std::size_t i = 0; i < pixels; ++i) {
     const std::size_t p = static_cast<std::size_t>(data.pixels[i]);
     const PixelSolution& s = solutions[i];
@@ -822,6 +832,10 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
     for (int c = 0; c < 3; ++c) {
       result.normals.pixels[3 * p + c] = static_cast<float>(n[c]);
       result.albedo.pixels[3 * p + c] = ok ? static_cast<float>(s.albedo[c]) : 0.0f;
+      if (nonlinear && ok) {
+        result.specular.pixels[3 * p + c] =
+            static_cast<float>(s.specular_scale * result.clusters[cluster_of[i]].ks[c]);
+      }
     }
     result.residual.pixels[p] = ok ? static_cast<float>(s.residual) : -1.0f;
   }

@@ -18,7 +18,8 @@
 //    estimated jointly with the normals: rounds of a
 //    global Ceres fit over a sample of pixels (normals fixed, albedo eliminated) alternate with
 //    the per-pixel fits. When no highlight is seen they are reported as not identifiable. They
-//    are shared by the object, or estimated per cluster of the albedo (specular_clusters).
+//    are shared by the object, or estimated per cluster of the albedo (specular_clusters), and
+//    their strength may vary from pixel to pixel (varying_specular).
 // Frame: SPEC.md's camera frame, orthographic view V = (0, 0, 1).
 #pragma once
 
@@ -41,7 +42,7 @@ struct NormalOptions {
   double saturation = 0.995;
   // Cauchy scale relative to the pixel's mean observation.
   double robust_scale = 0.15;
-  int irls_rounds = 3;
+  int irls_rounds = 4;
   // A fit whose RMS residual exceeds this fraction of the pixel's mean value is restarted from
   // Woodham on the darker observations (guards against local minima near highlights).
   double restart_residual = 0.02;
@@ -60,6 +61,10 @@ struct NormalOptions {
   // Objects of several materials: ks, shininess and the ambient term per cluster of the
   // (Woodham) albedo, by k-means on its chromaticity and brightness. 1 = shared by the object.
   int specular_clusters = 1;
+  // Estimated coefficients only: each pixel's ks is its cluster's times a scale σ ≥ 0, eliminated
+  // in closed form with the albedo, for gloss that varies over the surface (glaze, wear, paint).
+  // Known coefficients (material.json) are used as given.
+  bool varying_specular = true;
   // A known uniform albedo kd: what one or two images need (RecoverNormals).
   std::optional<Vec3d> known_albedo;
 
@@ -97,6 +102,7 @@ struct SpecularCluster {
 struct NormalResult {
   ImageF normals;   // 3 channels, unit xyz in the camera frame; 0 outside the mask
   ImageF albedo;    // 3 channels, kd
+  ImageF specular;  // 3 channels, each pixel's ks (its cluster's, times σ); empty for lambert
   ImageF residual;  // 1 channel: RMS model residual per pixel; −1 where no normal was found
   reflectance::Lobe model = reflectance::Lobe::kPhong;
   Vec3d ks = Vec3d::Zero();

@@ -28,6 +28,11 @@ def test_unknown_material_is_estimated():
     assert r["material_estimated"]
     assert r["shininess"] == pytest.approx(20, rel=0.1)
     np.testing.assert_allclose(r["ks"], 0.4, atol=0.04)
+    # One material: the per-pixel ks (specular map) stays at the object's wherever a highlight is seen.
+    assert r["specular"].shape == (80, 80, 3)
+    assert np.median(r["specular"][out["mask"]][:, 1]) == pytest.approx(0.4, rel=0.1)
+    assert "specular" not in iphong.estimate_normals(out["images"], out["light_directions"],
+                                                     out["light_intensities"], out["mask"], model="lambert")
     lambert = iphong.estimate_normals(out["images"], out["light_directions"], out["light_intensities"],
                                       out["mask"], model="lambert")
     e = iphong.angular_error(r["normals"], out["normals"], out["mask"])["mean_deg"]

@@ -181,6 +181,63 @@ TEST(Normals, SpecularCoefficientsPerAlbedoCluster) {
   EXPECT_LT(e2, 0.5 * e1);
 }
 
+// Two balls of one colour and shininess but different gloss: albedo clusters cannot tell them
+// apart, a per-pixel specular scale can.
+TEST(Normals, SpecularStrengthVaryingOverTheSurface) {
+  Synthetic s;
+  s.scene.camera = geometry::Camera::Orthographic(160, 80, 4.0);
+  const double golden = M_PI * (3 - std::sqrt(5.0));
+  for (int i = 0; i < 24; ++i) {
+    const double z = 1 - 0.5 * (i + 0.5) / 24, r = std::sqrt(1 - z * z);
+    s.scene.lighting.lights.push_back(Light::Directional(
+        Vec3d(r * std::cos(golden * i), r * std::sin(golden * i), z), Vec3d::Ones()));
+  }
+  reflectance::Material glossy, dull;
+  glossy.kd = dull.kd = Vec3d(0.6, 0.4, 0.3);
+  glossy.shininess = dull.shininess = 20;
+  glossy.ks = Vec3d::Constant(0.5), dull.ks = Vec3d::Constant(0.1);
+  for (const auto& [material, x] : {std::pair{glossy, -1.0}, std::pair{dull, 1.0}}) {
+    render::SceneObject ball;
+    ball.mesh = geometry::MakeSphere(0.9, 5);
+    geometry::TransformMesh(ball.mesh, Eigen::Affine3d(Eigen::Translation3d(x, 0, 0)));
+    ball.material = material;
+    s.scene.objects.push_back(ball);
+  }
+  s.out = render::Render(s.scene, render::RenderOptions{}, true);
+  std::vector<const float*> images;
+  std::vector<Vec3d> dirs;
+  for (std::size_t j = 0; j < s.out.per_light.size(); ++j) {
+    images.push_back(s.out.per_light[j].pixels.data());
+    dirs.push_back(s.scene.lighting.lights[j].direction_cam);
+  }
+  s.data = GatherObservations(images, 160, 80, s.out.mask, dirs,
+                              std::vector<Vec3d>(dirs.size(), Vec3d::Ones()));
+
+  NormalOptions uniform;
+  uniform.varying_specular = false;
+  const NormalResult one = EstimateNormals(s.data, uniform);
+  const NormalResult varying = EstimateNormals(s.data, NormalOptions{});
+  const double e1 = CompareNormals(one.normals, s.out.normal_cam, s.out.mask).mean_deg;
+  const double e2 = CompareNormals(varying.normals, s.out.normal_cam, s.out.mask).mean_deg;
+  RecordProperty("uniform_deg", std::to_string(e1));
+  RecordProperty("varying_deg", std::to_string(e2));
+  EXPECT_LT(e2, 0.2);
+  EXPECT_LT(e2, 0.5 * e1);
+  EXPECT_NEAR(varying.shininess, 20, 2.0);
+  // Each ball's ks, read off the specular map at its centre and halfway to its rim.
+  ASSERT_EQ(varying.specular.width, 160);
+  for (const auto& [column, truth] : {std::pair{40, 0.5}, std::pair{120, 0.1}}) {
+    for (const int dx : {0, 18}) {
+      const std::size_t p = 40 * 160 + column + dx;
+      ASSERT_TRUE(s.out.mask.inside[p]);
+      EXPECT_NEAR(varying.specular.pixels[3 * p + 1], truth, 0.1 * truth) << column << "+" << dx;
+    }
+  }
+  // Without the scale one ks serves both balls.
+  EXPECT_EQ(one.specular.pixels[3 * (40 * 160 + 40) + 1],
+            one.specular.pixels[3 * (40 * 160 + 120) + 1]);
+}
+
 TEST(Normals, ErrorGrowsSmoothlyWithNoise) {
   const auto m = Plastic();
   double previous = -1;
@@ -203,19 +260,23 @@ TEST(Normals, ErrorGrowsSmoothlyWithNoise) {
 
 TEST(Normals, RestartEscapesLocalMinimaNearHighlights) {
   // Red albedo (luminance 0.34) under a broad white lobe (luminance 0.49), 12 lights: highlights
-  // bias Woodham's start in several images at once. Without the restart about 4% of the pixels
-  // ended more than 10 degrees off.
+  // bias Woodham's start in several images at once. With TinySolver and no restart about 4% of
+  // the pixels ended more than 10 degrees off; the present fit strays less (0.014 degrees mean
+  // without the restart, 0.005 with it, one reweighting round).
   reflectance::Material red;
   red.kd = Vec3d(0.9, 0.2, 0.1);
   red.ks = Vec3d(0.5, 0.5, 0.4);
   red.shininess = 10;
   const Synthetic s = MakeSphereData(red, 12, 0.0, Vec3d::Zero(), 128);
   NormalOptions o = Known(red, Vec3d::Zero());
+  // One reweighting round: later rounds free some of these pixels too, the restart all of them.
+  o.irls_rounds = 1;
   const AngularErrorMetrics with =
       CompareNormals(EstimateNormals(s.data, o).normals, s.out.normal_cam, s.out.mask);
   o.restart_residual = 1e9;  // never restart
   const AngularErrorMetrics without =
       CompareNormals(EstimateNormals(s.data, o).normals, s.out.normal_cam, s.out.mask);
+  RecordProperty("without_restart_deg", std::to_string(without.mean_deg));
   EXPECT_LT(with.mean_deg, 0.1);
   EXPECT_GT(without.mean_deg, 3 * with.mean_deg);
   EXPECT_GT(with.below_10_deg, 0.995);
