@@ -57,7 +57,7 @@ struct NormalOptions {
   Vec3d ks = Vec3d::Zero();
   double shininess = 1;
   int specular_rounds = 2;
-  int specular_sample = 1000;  // pixels in the global fit (per cluster)
+  int specular_sample = 500;  // pixels in the global fit (per cluster)
   // Objects of several materials: ks, shininess and the ambient term per cluster of the
   // (Woodham) albedo, by k-means on its chromaticity and brightness. 1 = shared by the object.
   int specular_clusters = 1;
