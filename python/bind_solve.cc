@@ -37,7 +37,7 @@ void BindSolve(py::module_& m) {
       [](const py::object& images_in, const py::object& light_directions,
          const py::object& light_intensities, const py::object& mask_in, const std::string& model,
          const py::object& material, double discard_dark, double discard_bright, bool fast,
-         int specular_clusters, bool varying_specular, int threads) {
+         int specular_clusters, bool varying_specular, double specular_prior, int threads) {
         FloatArray images = FloatArray::ensure(images_in);
         if (!images || images.ndim() != 4 || images.shape(3) != 3) {
           throw std::invalid_argument("images must have shape (K, H, W, 3)");
@@ -66,6 +66,7 @@ void BindSolve(py::module_& m) {
         options.color_residuals = !fast;
         options.specular_clusters = specular_clusters;
         options.varying_specular = varying_specular;
+        options.specular_prior = specular_prior;
         if (!material.is_none()) {
           const py::dict d = material.cast<py::dict>();
           auto rgb = [&](const char* key, const Vec3d& fallback) -> Vec3d {
@@ -138,7 +139,8 @@ void BindSolve(py::module_& m) {
       py::arg("images"), py::arg("light_directions"), py::arg("light_intensities") = py::none(),
       py::arg("mask") = py::none(), py::arg("model") = "phong", py::arg("material") = py::none(),
       py::arg("discard_dark") = 0.3, py::arg("discard_bright") = 0.1, py::arg("fast") = false,
-      py::arg("specular_clusters") = 1, py::arg("varying_specular") = true, py::arg("threads") = 0,
+      py::arg("specular_clusters") = 1, py::arg("varying_specular") = true,
+      py::arg("specular_prior") = solve::NormalOptions{}.specular_prior, py::arg("threads") = 0,
       R"doc(Recover per-pixel normals and albedo (see `iphong normals`).
 
 images (K, H, W, 3) linear float; light_directions (K, 3) from the surface toward the light;
@@ -146,7 +148,8 @@ light_intensities (K, 3) or None (ones); mask (H, W) bool or None; model "phong"
 "blinn-phong" or "lambert" (Woodham); material: dict with ka, ks, shininess, ambient (and model)
 when the coefficients are known, else they are estimated (per albedo cluster with
 specular_clusters > 1: the result's clusters list and cluster_map (H, W)); varying_specular
-lets an estimated ks vary in strength from pixel to pixel.
+lets an estimated ks vary in strength from pixel to pixel (specular_prior: its pull toward the
+shared strength, in observations of the lobe's peak).
 Returns normals (H, W, 3), albedo (H, W, 3), specular (H, W, 3: each pixel's ks; not for
 lambert), residual (H, W; -1 where no normal was found),
 the specular coefficients used or estimated, and a summary. With 1 or 2 images (material with

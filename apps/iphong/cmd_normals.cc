@@ -35,6 +35,7 @@ struct NormalsCommandOptions {
   bool integrate = false;
   int specular_clusters = 1;
   bool uniform_specular = false;
+  double specular_prior = solve::NormalOptions{}.specular_prior;
   int threads = 0;
 };
 
@@ -68,6 +69,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   options.color_residuals = !o.fast;
   options.specular_clusters = o.specular_clusters;
   options.varying_specular = !o.uniform_specular;
+  options.specular_prior = o.specular_prior;
   if (dataset.material && !o.ignore_material) {
     options.model = dataset.material->model;
     options.material_known = true;
@@ -325,6 +327,11 @@ void AddNormalsCommand(CLI::App& app) {
       "--uniform-specular", o->uniform_specular,
       "Estimated coefficients: one ks per cluster everywhere, instead of scaled per pixel "
       "(specular.exr)");
+  cmd->add_option("--specular-prior", o->specular_prior,
+                  "Pull of each pixel's specular strength toward the estimated one, in "
+                  "observations of the lobe's peak (lower follows varying gloss more freely)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_flag("--integrate", o->integrate,
                 "Also integrate the normals: height.exr, mesh.ply (albedo colours), height.png");
   cmd->add_option("--threads", o->threads, "Threads (0 = all cores)")

@@ -23,13 +23,13 @@ inline double Luminance(const Vec3d& rgb) {
 // in one pass over the lights. y(j, c) is observation j of channel c (a plain number or a T),
 // ks(c) the channel's specular coefficient, weight(j) the observation's weight.
 // With `specular_scale`, ks is scaled by one more unknown σ ≥ 0 shared by the channels, found in
-// the same pass: substituting kd_c(σ) leaves a linear equation in σ,
-//   σ Σ_c ks_c² (S − X²/D) = Σ_c ks_c (B_c − A_c X/D),
+// the same pass: substituting kd_c(σ) leaves a linear equation in σ (with a prior λ(σ − 1)²Σks²),
+//   σ Σ_c ks_c² (S − X²/D + λ) = Σ_c ks_c (B_c − A_c X/D) + λ Σ_c ks_c²,
 // with D = Σ w d², X = Σ w d s, S = Σ w s², A_c = Σ w d y_c, B_c = Σ w s y_c.
 template <typename T, typename Ks, typename Y, typename Weight>
 std::array<T, 3> EliminatedAlbedo(const std::vector<reflectance::LightFactors<T>>& factors,
                                   int channels, Ks ks, Y y, Weight weight,
-                                  T* specular_scale = nullptr) {
+                                  T* specular_scale = nullptr, double scale_prior = 1) {
   T d = T(0), x = T(0), s = T(0);
   std::array<T, 3> a = {T(0), T(0), T(0)}, b = {T(0), T(0), T(0)};
   for (std::size_t j = 0; j < factors.size(); ++j) {
@@ -51,13 +51,14 @@ std::array<T, 3> EliminatedAlbedo(const std::vector<reflectance::LightFactors<T>
   }
   T sigma = T(1);
   if (specular_scale) {
+    // The prior toward the estimated strength (σ = 1), worth λ observations of the lobe's peak:
+    // a pixel that sees no highlight keeps σ near 1 instead of dividing noise by nothing.
     T num = T(0), den = T(0);
     for (int c = 0; c < channels; ++c) {
-      num += ks(c) * (b[c] - a[c] * x / d);
-      den += ks(c) * ks(c) * (s - x * x / d);
+      num += ks(c) * (b[c] - a[c] * x / d) + scale_prior * ks(c) * ks(c);
+      den += ks(c) * ks(c) * (s - x * x / d + T(scale_prior));
     }
-    // No lobe in sight (den ≈ 0) leaves σ free: keep the estimated strength.
-    sigma = den > T(1e-12) ? num / den : T(1);
+    sigma = den > T(1e-24) ? num / den : T(1);
     if (sigma < T(0)) sigma = T(0);
     *specular_scale = sigma;
   }

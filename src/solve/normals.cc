@@ -149,6 +149,7 @@ struct PixelModel {
   const double* y = nullptr;         // K × channels
   Vec3d ks = Vec3d::Zero();          // per channel (luminance in [0] when channels = 1)
   bool free_specular_scale = false;  // ks scaled per pixel by σ ≥ 0, eliminated like kd
+  double specular_prior = 1;         // NormalOptions::specular_prior
   double shininess = 1;
   reflectance::ModelOptions model;
   Vec3d n0, t1, t2;                                      // chart: N = normalize(n0 + x0 t1 + x1 t2)
@@ -185,7 +186,8 @@ struct PixelModel {
     return internal::EliminatedAlbedo<Jet2>(
         factors, channels, [&](int c) { return ks[c]; },
         [&](std::size_t j, int c) { return y[j * channels + c]; },
-        [&](std::size_t j) { return weight[j]; }, free_specular_scale ? sigma : nullptr);
+        [&](std::size_t j) { return weight[j]; }, free_specular_scale ? sigma : nullptr,
+        specular_prior);
   }
 
   // Gauss–Newton normal equations of ½ Σ_j w_j Σ_c r_jc² with r = y − kd·diffuse − ks·specular,
@@ -256,6 +258,7 @@ struct PixelFitter {
     // No specular coefficient means no specular term: the Lambertian model, not a zero lobe.
     model.model.lobe = ks.isZero() ? reflectance::Lobe::kLambert : o.model;
     model.free_specular_scale = o.varying_specular && !o.material_known && !ks.isZero();
+    model.specular_prior = o.specular_prior;
     model.factors.reserve(d.images);
     candidate = model;
     y_rgb.resize(3 * d.images);
@@ -418,7 +421,8 @@ struct PixelFitter {
     double sigma = 1;
     const std::array<double, 3> kd = internal::EliminatedAlbedo<double>(
         f, 3, [&](int c) { return ks[c]; }, [&](std::size_t j, int c) { return y_rgb[3 * j + c]; },
-        [&](std::size_t j) { return weights[j]; }, model.free_specular_scale ? &sigma : nullptr);
+        [&](std::size_t j) { return weights[j]; }, model.free_specular_scale ? &sigma : nullptr,
+        options.specular_prior);
     s.albedo = Vec3d(kd[0], kd[1], kd[2]);
     s.specular_scale = sigma;
     double sq = 0;
@@ -702,6 +706,7 @@ std::string NormalOptions::Validate() const {
   }
   if (specular_rounds < 0 || specular_sample < 1) return "specular rounds/sample out of range";
   if (specular_clusters < 1 || specular_clusters > 16) return "specular clusters must be in 1..16";
+  if (!(specular_prior > 0) || !std::isfinite(specular_prior)) return "specular prior must be > 0";
   return "";
 }
 

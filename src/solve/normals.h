@@ -65,6 +65,10 @@ struct NormalOptions {
   // in closed form with the albedo, for gloss that varies over the surface (glaze, wear, paint).
   // Known coefficients (material.json) are used as given.
   bool varying_specular = true;
+  // The pull of σ toward 1, in observations of the lobe's peak. 1 suits DiLiGenT's 96 lights;
+  // with few lights or rare highlights it shrinks σ noticeably (a weaker pull follows gloss
+  // better where every pixel sees a highlight).
+  double specular_prior = 1;
   // A known uniform albedo kd: what one or two images need (RecoverNormals).
   std::optional<Vec3d> known_albedo;
 
