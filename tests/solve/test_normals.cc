@@ -279,6 +279,7 @@ TEST(Normals, RestartEscapesLocalMinimaNearHighlights) {
   NormalOptions o = Known(red, Vec3d::Zero());
   // One reweighting round: later rounds free some of these pixels too, the restart all of them.
   o.irls_rounds = 1;
+  o.restart_residual = 0.02;
   const AngularErrorMetrics with =
       CompareNormals(EstimateNormals(s.data, o).normals, s.out.normal_cam, s.out.mask);
   o.restart_residual = 1e9;  // never restart
