@@ -83,6 +83,15 @@ bool IsConstantInteger(const T& x, int* exponent) {
   }
 }
 
+// The view and light directions' type, kept out of template deduction: D is T unless a caller
+// names it (ShadingFactors<Jet, double>), so Jet-cast expressions still convert as before.
+template <typename D>
+struct DirectionsOf {
+  using type = Vec3T<D>;
+};
+template <typename D>
+using Directions = typename DirectionsOf<D>::type;
+
 // x^n for n ≥ 0 by repeated squaring.
 template <typename T>
 T IntegerPower(const T& x, int n) {
@@ -120,10 +129,13 @@ T LobePower(const T& cosine, const T& lambda, const T& shininess, const ModelOpt
 }
 
 // The specular lobe value (R·V)^n or (N·H)^n for one light, zero where seed 003's rules say so
-// (N·L ≤ 0, or the lobe's cosine ≤ 0). All vectors unit, camera frame.
-template <typename T>
-T SpecularLobe(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam, const Vec3T<T>& light_dir_cam,
-               const T& shininess, const ModelOptions& options) {
+// (N·L ≤ 0, or the lobe's cosine ≤ 0). All vectors unit, camera frame. The view and light may
+// have a plain scalar type D while the normal is a Jet (SpecularLobe<Jet, double>): constants
+// then cost no derivative arithmetic (Ceres declares the mixed Eigen products).
+template <typename T, typename D = T>
+T SpecularLobe(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam,
+               const detail::Directions<D>& light_dir_cam, const T& shininess,
+               const ModelOptions& options) {
   using std::sqrt;
   if (options.lobe == Lobe::kLambert) return T(0);
   const T n_dot_l = normal_cam.dot(light_dir_cam);
@@ -139,10 +151,10 @@ T SpecularLobe(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam, const Vec3T
     return LobePower(cosine, lambda, shininess, options);
   }
   // Blinn-Phong. L = −V leaves H undefined; no highlight can be seen there.
-  const Vec3T<T> sum = light_dir_cam + view_cam;
-  const T sum_norm2 = sum.squaredNorm();
-  if (!(sum_norm2 > T(1e-24))) return T(0);
-  const Vec3T<T> half_cam = sum / sqrt(sum_norm2);
+  const Vec3T<D> sum = light_dir_cam + view_cam;
+  const D sum_norm2 = sum.squaredNorm();
+  if (!(sum_norm2 > D(1e-24))) return T(0);
+  const Vec3T<D> half_cam = sum / sqrt(sum_norm2);
   const T cosine = normal_cam.dot(half_cam);
   if (!(cosine > T(0))) return T(0);
   const T lambda = options.power == PowerMode::kFastApprox
@@ -161,15 +173,15 @@ struct LightFactors {
   T specular = T(0);
 };
 
-template <typename T>
-LightFactors<T> ShadingFactors(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam,
-                               const Vec3T<T>& light_dir_cam, const T& shininess,
+template <typename T, typename D = T>
+LightFactors<T> ShadingFactors(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam,
+                               const detail::Directions<D>& light_dir_cam, const T& shininess,
                                const ModelOptions& options) {
   LightFactors<T> f;
   const T n_dot_l = normal_cam.dot(light_dir_cam);
   if (!(n_dot_l > T(0))) return f;
   f.diffuse = n_dot_l;
-  f.specular = SpecularLobe(normal_cam, view_cam, light_dir_cam, shininess, options);
+  f.specular = SpecularLobe<T, D>(normal_cam, view_cam, light_dir_cam, shininess, options);
   return f;
 }
 

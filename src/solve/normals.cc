@@ -167,14 +167,14 @@ struct PixelModel {
 
   void Evaluate(const Eigen::Vector2d& x) {
     const Jet2 x0(x[0], 0), x1(x[1], 1);
-    const Vec3T<Jet2> raw = n0.cast<Jet2>() + x0 * t1.cast<Jet2>() + x1 * t2.cast<Jet2>();
+    const Vec3T<Jet2> raw = n0.cast<Jet2>() + x0 * t1 + x1 * t2;
     const Vec3T<Jet2> normal = raw / raw.norm();
-    const Vec3T<Jet2> view = internal::ViewCam().cast<Jet2>();
+    const Vec3d view = internal::ViewCam();
     const Jet2 n(shininess);
     factors.resize(data->images);
     for (int j = 0; j < data->images; ++j) {
-      factors[j] = reflectance::ShadingFactors<Jet2>(
-          normal, view, data->light_directions[j].cast<Jet2>(), n, model);
+      factors[j] = reflectance::ShadingFactors<Jet2, double>(normal, view,
+                                                             data->light_directions[j], n, model);
     }
   }
 
@@ -483,10 +483,10 @@ struct SpecularCost {
         return out;
       }
     };
-    const Vec3T<Jet1> n = normal.cast<Jet1>(), view = internal::ViewCam().cast<Jet1>();
+    const Vec3T<Jet1> n = normal.cast<Jet1>();
     for (int j = 0; j < k; ++j) {
-      const reflectance::LightFactors<Jet1> f1 = reflectance::ShadingFactors<Jet1>(
-          n, view, data->light_directions[j].cast<Jet1>(), Jet1(n_value, 0), model);
+      const reflectance::LightFactors<Jet1> f1 = reflectance::ShadingFactors<Jet1, double>(
+          n, internal::ViewCam(), data->light_directions[j], Jet1(n_value, 0), model);
       (*f)[j] = {chain(f1.diffuse), chain(f1.specular)};
     }
     const float* obs = data->pixel(p);

@@ -197,6 +197,32 @@ TEST_P(GradientTest, JustInsideTheTerminatorMatchesFiniteDifferences) {
   ExpectJacobiansAgree(p, o, 1e-4);
 }
 
+// Constant view and light as plain numbers with a Jet normal (what the solvers pass) give the
+// values and derivatives of the all-Jet evaluation.
+TEST_P(GradientTest, PlainDirectionsWithJetNormalAgree) {
+  const ModelOptions o = Options(GetParam().lobe, GetParam().power);
+  using Jet2 = ceres::Jet<double, 2>;
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 100; ++trial) {
+    const Params p = RandomParams(rng);
+    const Vec3T<Jet2> normal(Jet2(p[0], 0), Jet2(p[1], 1), Jet2(p[2]));
+    const Vec3d view(p[3], p[4], p[5]), light(p[6], p[7], p[8]);
+    const Jet2 shininess(p[15]);
+    const LightFactors<Jet2> mixed =
+        ShadingFactors<Jet2, double>(normal, view, light, shininess, o);
+    const LightFactors<Jet2> jets =
+        ShadingFactors<Jet2>(normal, view.cast<Jet2>(), light.cast<Jet2>(), shininess, o);
+    // Equal up to rounding (H is normalized in double instead of in Jets).
+    EXPECT_DOUBLE_EQ(mixed.diffuse.a, jets.diffuse.a);
+    EXPECT_NEAR(mixed.specular.a, jets.specular.a, 1e-13 * (1 + jets.specular.a));
+    for (int i = 0; i < 2; ++i) {
+      EXPECT_NEAR(mixed.diffuse.v[i], jets.diffuse.v[i], 1e-12);
+      EXPECT_NEAR(mixed.specular.v[i], jets.specular.v[i],
+                  1e-12 * (1 + std::abs(jets.specular.v[i])));
+    }
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Lobes, GradientTest,
     ::testing::Values(LobeCase{Lobe::kPhong, PowerMode::kExact, "PhongExact"},
