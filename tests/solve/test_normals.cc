@@ -51,6 +51,36 @@ Synthetic MakeSphereData(const reflectance::Material& material, int lights, doub
   return s;
 }
 
+// Two balls side by side (left at x = −1, right at x = 1) in a 160×80 view under 24 white
+// hemisphere lights.
+Synthetic MakeTwoBallsData(const reflectance::Material& left, const reflectance::Material& right) {
+  Synthetic s;
+  s.scene.camera = geometry::Camera::Orthographic(160, 80, 4.0);
+  const double golden = M_PI * (3 - std::sqrt(5.0));
+  for (int i = 0; i < 24; ++i) {
+    const double z = 1 - 0.5 * (i + 0.5) / 24, r = std::sqrt(1 - z * z);
+    s.scene.lighting.lights.push_back(Light::Directional(
+        Vec3d(r * std::cos(golden * i), r * std::sin(golden * i), z), Vec3d::Ones()));
+  }
+  for (const auto& [material, x] : {std::pair{left, -1.0}, std::pair{right, 1.0}}) {
+    render::SceneObject ball;
+    ball.mesh = geometry::MakeSphere(0.9, 5);
+    geometry::TransformMesh(ball.mesh, Eigen::Affine3d(Eigen::Translation3d(x, 0, 0)));
+    ball.material = material;
+    s.scene.objects.push_back(ball);
+  }
+  s.out = render::Render(s.scene, render::RenderOptions{}, true);
+  std::vector<const float*> images;
+  std::vector<Vec3d> dirs;
+  for (std::size_t j = 0; j < s.out.per_light.size(); ++j) {
+    images.push_back(s.out.per_light[j].pixels.data());
+    dirs.push_back(s.scene.lighting.lights[j].direction_cam);
+  }
+  s.data = GatherObservations(images, 160, 80, s.out.mask, dirs,
+                              std::vector<Vec3d>(dirs.size(), Vec3d::Ones()));
+  return s;
+}
+
 reflectance::Material Plastic() {
   reflectance::Material m;
   m.ka = Vec3d::Constant(0.02);
@@ -130,33 +160,10 @@ TEST(Normals, EstimatesUnknownSpecularCoefficientsAndAmbient) {
 // Two balls of different materials side by side: one shared set of specular coefficients cannot
 // fit both; one per albedo cluster does.
 TEST(Normals, SpecularCoefficientsPerAlbedoCluster) {
-  Synthetic s;
-  s.scene.camera = geometry::Camera::Orthographic(160, 80, 4.0);
-  const double golden = M_PI * (3 - std::sqrt(5.0));
-  for (int i = 0; i < 24; ++i) {
-    const double z = 1 - 0.5 * (i + 0.5) / 24, r = std::sqrt(1 - z * z);
-    s.scene.lighting.lights.push_back(Light::Directional(
-        Vec3d(r * std::cos(golden * i), r * std::sin(golden * i), z), Vec3d::Ones()));
-  }
   reflectance::Material red, blue;
   red.kd = Vec3d(0.7, 0.15, 0.1), red.ks = Vec3d::Constant(0.5), red.shininess = 40;
   blue.kd = Vec3d(0.1, 0.3, 0.6), blue.ks = Vec3d::Constant(0.15), blue.shininess = 8;
-  for (const auto& [material, x] : {std::pair{red, -1.0}, std::pair{blue, 1.0}}) {
-    render::SceneObject ball;
-    ball.mesh = geometry::MakeSphere(0.9, 5);
-    geometry::TransformMesh(ball.mesh, Eigen::Affine3d(Eigen::Translation3d(x, 0, 0)));
-    ball.material = material;
-    s.scene.objects.push_back(ball);
-  }
-  s.out = render::Render(s.scene, render::RenderOptions{}, true);
-  std::vector<const float*> images;
-  std::vector<Vec3d> dirs, intensities;
-  for (std::size_t j = 0; j < s.out.per_light.size(); ++j) {
-    images.push_back(s.out.per_light[j].pixels.data());
-    dirs.push_back(s.scene.lighting.lights[j].direction_cam);
-    intensities.push_back(Vec3d::Ones());
-  }
-  s.data = GatherObservations(images, 160, 80, s.out.mask, dirs, intensities);
+  const Synthetic s = MakeTwoBallsData(red, blue);
 
   NormalOptions shared;
   const NormalResult one = EstimateNormals(s.data, shared);
@@ -184,34 +191,11 @@ TEST(Normals, SpecularCoefficientsPerAlbedoCluster) {
 // Two balls of one colour and shininess but different gloss: albedo clusters cannot tell them
 // apart, a per-pixel specular scale can.
 TEST(Normals, SpecularStrengthVaryingOverTheSurface) {
-  Synthetic s;
-  s.scene.camera = geometry::Camera::Orthographic(160, 80, 4.0);
-  const double golden = M_PI * (3 - std::sqrt(5.0));
-  for (int i = 0; i < 24; ++i) {
-    const double z = 1 - 0.5 * (i + 0.5) / 24, r = std::sqrt(1 - z * z);
-    s.scene.lighting.lights.push_back(Light::Directional(
-        Vec3d(r * std::cos(golden * i), r * std::sin(golden * i), z), Vec3d::Ones()));
-  }
   reflectance::Material glossy, dull;
   glossy.kd = dull.kd = Vec3d(0.6, 0.4, 0.3);
   glossy.shininess = dull.shininess = 20;
   glossy.ks = Vec3d::Constant(0.5), dull.ks = Vec3d::Constant(0.1);
-  for (const auto& [material, x] : {std::pair{glossy, -1.0}, std::pair{dull, 1.0}}) {
-    render::SceneObject ball;
-    ball.mesh = geometry::MakeSphere(0.9, 5);
-    geometry::TransformMesh(ball.mesh, Eigen::Affine3d(Eigen::Translation3d(x, 0, 0)));
-    ball.material = material;
-    s.scene.objects.push_back(ball);
-  }
-  s.out = render::Render(s.scene, render::RenderOptions{}, true);
-  std::vector<const float*> images;
-  std::vector<Vec3d> dirs;
-  for (std::size_t j = 0; j < s.out.per_light.size(); ++j) {
-    images.push_back(s.out.per_light[j].pixels.data());
-    dirs.push_back(s.scene.lighting.lights[j].direction_cam);
-  }
-  s.data = GatherObservations(images, 160, 80, s.out.mask, dirs,
-                              std::vector<Vec3d>(dirs.size(), Vec3d::Ones()));
+  const Synthetic s = MakeTwoBallsData(glossy, dull);
 
   NormalOptions uniform;
   uniform.varying_specular = false;
