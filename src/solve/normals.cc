@@ -245,7 +245,7 @@ struct PixelFitter {
   PixelModel model, candidate;  // the current point and the trial step (swapped on acceptance)
   std::vector<double> y_rgb, y_lum, usable, weights, residuals;
   std::vector<std::pair<double, int>> order;
-  double scale = 1;      // the Cauchy scale σ of the pixel being fitted
+  double scale = 1;      // the Cauchy scale of the pixel being fitted (not the specular σ)
   NormalOptions darker;  // Woodham on the darker observations: the second start
 
   PixelFitter(const PhotometricData& d, const NormalOptions& o, const Vec3d& fit_ks,
