@@ -185,6 +185,16 @@ LightFactors<T> ShadingFactors(const Vec3T<T>& normal_cam, const detail::Directi
   return f;
 }
 
+// One light's contribution from its factors: Id ⊙ kd · diffuse + Is ⊙ ks · specular. Solvers that
+// keep the factors of a normal (to eliminate kd) combine them here instead of shading again.
+template <typename T>
+Vec3T<T> CombineFactors(const LightFactors<T>& f, const Vec3T<T>& diffuse_intensity,
+                        const Vec3T<T>& specular_intensity, const Vec3T<T>& kd,
+                        const Vec3T<T>& ks) {
+  return diffuse_intensity.cwiseProduct(kd) * f.diffuse +
+         specular_intensity.cwiseProduct(ks) * f.specular;
+}
+
 // One light's contribution Id ⊙ kd (N·L) + Is ⊙ ks · lobe, without the ambient term. This is the
 // residual model of photometric stereo: image j is Ia ⊙ ka + LightTerm(L_j, E_j, E_j).
 template <typename T>
@@ -194,8 +204,7 @@ Vec3T<T> LightTerm(const Vec3T<T>& normal_cam, const Vec3T<T>& view_cam,
                    const ModelOptions& options) {
   const LightFactors<T> f =
       ShadingFactors(normal_cam, view_cam, light_dir_cam, material.shininess, options);
-  return diffuse_intensity.cwiseProduct(material.kd) * f.diffuse +
-         specular_intensity.cwiseProduct(material.ks) * f.specular;
+  return CombineFactors(f, diffuse_intensity, specular_intensity, material.kd, material.ks);
 }
 
 // The ambient term Ia ⊙ ka.

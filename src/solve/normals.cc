@@ -411,8 +411,8 @@ struct PixelFitter {
   }
 
   // The RGB albedo, eliminated as in the fit with its final weights, and the RMS difference
-  // between the observations and the model (Ia⊙ka + E⊙(kd·diffuse + ks·specular), the factors
-  // of the shared model at the final normal) over the usable ones.
+  // between the observations and the shared model over the usable ones (its factors at the final
+  // normal, combined by reflectance::CombineFactors, plus Ia⊙ka).
   void AlbedoAndResidual(const float* obs, PixelSolution& s) {
     const int k = data.images;
     std::vector<reflectance::LightFactors<double>>& f = values;
@@ -429,9 +429,9 @@ struct PixelFitter {
     int used = 0;
     for (int j = 0; j < k; ++j) {
       if (usable[j] == 0) continue;
-      const Vec3d predicted =
-          options.ambient_term + data.light_intensities[j].cwiseProduct(s.albedo * f[j].diffuse +
-                                                                        sigma * ks * f[j].specular);
+      const Vec3d& e = data.light_intensities[j];
+      const Vec3d predicted = options.ambient_term +
+                              reflectance::CombineFactors<double>(f[j], e, e, s.albedo, sigma * ks);
       sq += (Vec3d(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]) - predicted).squaredNorm();
       used += 3;
     }
