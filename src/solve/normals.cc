@@ -139,10 +139,10 @@ PixelSolution Woodham(const PhotometricData& data, std::size_t p, const NormalOp
 // depart from the model.
 //
 // Evaluate() runs the shared model once per light at a point of the tangent-plane chart, as
-// ceres::Jets in the two chart coordinates, and keeps those factors. Everything the fit needs
-// afterwards comes from them without running the model again: the weighted cost with its normal
-// equations for any weights (Reduce), the unweighted residuals for the robust weights, and the
-// final albedo and residual.
+// ceres::Jets in the two chart coordinates, into the caller's factors. Everything the fit needs
+// afterwards comes from those factors without running the model again: the weighted cost with
+// its normal equations for any weights (Reduce), the unweighted residuals for the robust weights,
+// and the final albedo and residual.
 struct PixelModel {
   const PhotometricData* data = nullptr;
   int channels = 3;
@@ -152,8 +152,9 @@ struct PixelModel {
   double specular_prior = 1;         // NormalOptions::specular_prior
   double shininess = 1;
   reflectance::ModelOptions model;
-  Vec3d n0, t1, t2;                                      // chart: N = normalize(n0 + x0 t1 + x1 t2)
-  std::vector<reflectance::LightFactors<Jet2>> factors;  // at the last evaluated point
+  Vec3d n0, t1, t2;  // chart: N = normalize(n0 + x0 t1 + x1 t2)
+
+  using Factors = std::vector<reflectance::LightFactors<Jet2>>;  // one per light
 
   // Centres the chart on n (unit).
   void Center(const Vec3d& n) {
@@ -165,23 +166,23 @@ struct PixelModel {
 
   Vec3d Normal(const Eigen::Vector2d& x) const { return (n0 + x[0] * t1 + x[1] * t2).normalized(); }
 
-  void Evaluate(const Eigen::Vector2d& x) {
+  void Evaluate(const Eigen::Vector2d& x, Factors* factors) const {
     const Jet2 x0(x[0], 0), x1(x[1], 1);
     const Vec3T<Jet2> raw = n0.cast<Jet2>() + x0 * t1 + x1 * t2;
     const Vec3T<Jet2> normal = raw / raw.norm();
     const Vec3d view = internal::ViewCam();
     const Jet2 n(shininess);
-    factors.resize(data->images);
+    factors->resize(data->images);
     for (int j = 0; j < data->images; ++j) {
-      factors[j] = reflectance::ShadingFactors<Jet2, double>(normal, view,
-                                                             data->light_directions[j], n, model);
+      (*factors)[j] = reflectance::ShadingFactors<Jet2, double>(
+          normal, view, data->light_directions[j], n, model);
     }
   }
 
   // The albedo of each channel and the specular scale σ (1 unless free) eliminated with
   // `weight`, as Jets (their dependence on the normal belongs to the Jacobian of the reduced
   // problem).
-  std::array<Jet2, 3> Albedo(const double* weight, Jet2* sigma) const {
+  std::array<Jet2, 3> Albedo(const Factors& factors, const double* weight, Jet2* sigma) const {
     *sigma = Jet2(1.0);
     return internal::EliminatedAlbedo<Jet2>(
         factors, channels, [&](int c) { return ks[c]; },
@@ -197,11 +198,11 @@ struct PixelModel {
     Eigen::Matrix2d jtj = Eigen::Matrix2d::Zero();
     Eigen::Vector2d descent = Eigen::Vector2d::Zero();  // −Jᵀr
   };
-  NormalEquations Reduce(const double* weight) const {
+  NormalEquations Reduce(const Factors& factors, const double* weight) const {
     NormalEquations e;
     const int k = data->images;
     Jet2 sigma;
-    const std::array<Jet2, 3> kd = Albedo(weight, &sigma);
+    const std::array<Jet2, 3> kd = Albedo(factors, weight, &sigma);
     // JᵀJ is symmetric: three sums, filled in at the end.
     double cost = 0, h00 = 0, h01 = 0, h11 = 0, g0 = 0, g1 = 0;
     for (int j = 0; j < k; ++j) {
@@ -224,10 +225,10 @@ struct PixelModel {
     return e;
   }
 
-  // Unweighted residuals at the last evaluated point, the albedo eliminated with `weight`.
-  void Residuals(const double* weight, double* out) const {
+  // Unweighted residuals at the factors' point, the albedo eliminated with `weight`.
+  void Residuals(const Factors& factors, const double* weight, double* out) const {
     Jet2 sigma;
-    const std::array<Jet2, 3> kd = Albedo(weight, &sigma);
+    const std::array<Jet2, 3> kd = Albedo(factors, weight, &sigma);
     for (int c = 0; c < channels; ++c) {
       for (int j = 0; j < data->images; ++j) {
         out[j * channels + c] = y[j * channels + c] - kd[c].a * factors[j].diffuse.a -
@@ -242,7 +243,9 @@ struct PixelFitter {
   const PhotometricData& data;
   const NormalOptions& options;
   const Vec3d ks;
-  PixelModel model, candidate;  // the current point and the trial step (swapped on acceptance)
+  PixelModel model;
+  PixelModel::Factors factors, trial;  // at the current point and the trial step (swapped)
+  std::vector<reflectance::LightFactors<double>> values;  // the factors' values, for the output
   std::vector<double> y_rgb, y_lum, usable, weights, residuals;
   std::vector<std::pair<double, int>> order;
   double scale = 1;      // the Cauchy scale of the pixel being fitted (not the specular σ)
@@ -259,8 +262,8 @@ struct PixelFitter {
     model.model.lobe = ks.isZero() ? reflectance::Lobe::kLambert : o.model;
     model.free_specular_scale = o.varying_specular && !o.material_known && !ks.isZero();
     model.specular_prior = o.specular_prior;
-    model.factors.reserve(d.images);
-    candidate = model;
+    factors.reserve(d.images);
+    trial.reserve(d.images);
     y_rgb.resize(3 * d.images);
     y_lum.resize(d.images);
     usable.resize(d.images);
@@ -300,14 +303,14 @@ struct PixelFitter {
   }
 
   // Levenberg–Marquardt on the two chart coordinates with fixed weights, from x (updated in
-  // place; `model` holds the factors at x on entry and on return). The damping follows
+  // place; `factors` are the model's at x on entry and on return). The damping follows
   // ceres::TinySolver; unlike it, every trial point is evaluated with its derivatives, so an
   // accepted step costs one run of the model, not two.
   int Minimize(Eigen::Vector2d& x) {
     // A relative cost change below this leaves the normal within ~1e-3 σ/kd of the optimum, far
     // inside the noise (on DiLiGenT cat 1e-12 spends twice the iterations for the same figures).
     const double kCostTolerance = 1e-6;
-    PixelModel::NormalEquations eq = model.Reduce(weights.data());
+    PixelModel::NormalEquations eq = model.Reduce(factors, weights.data());
     double u = 1e-4, v = 2;
     int iterations = 0;
     for (; iterations < options.max_iterations; ++iterations) {
@@ -318,14 +321,14 @@ struct PixelFitter {
       // saves the iterations that only polish noise.
       if (!step.allFinite() || step.norm() < 1e-8) break;
       const Eigen::Vector2d x_new = x + step;
-      candidate.Evaluate(x_new);
-      const PixelModel::NormalEquations eq_new = candidate.Reduce(weights.data());
+      model.Evaluate(x_new, &trial);
+      const PixelModel::NormalEquations eq_new = model.Reduce(trial, weights.data());
       const double change = eq.cost - eq_new.cost;
       const double predicted = step.dot(eq.descent - 0.5 * eq.jtj * step);
       const double rho = change / predicted;
       if (rho > 0) {
         x = x_new;
-        std::swap(model.factors, candidate.factors);
+        std::swap(factors, trial);
         eq = eq_new;
         if (std::abs(change) < kCostTolerance * eq.cost) break;
         const double t = 2 * rho - 1;
@@ -365,12 +368,11 @@ struct PixelFitter {
       return;
     }
     scale = options.robust_scale * std::max(mean / count, 1e-6);
-    model.y = candidate.y = model.channels == 1 ? y_lum.data() : y_rgb.data();
+    model.y = model.channels == 1 ? y_lum.data() : y_rgb.data();
     weights = usable;
     model.Center(s.normal);
-    candidate.n0 = model.n0, candidate.t1 = model.t1, candidate.t2 = model.t2;
     Eigen::Vector2d x = Eigen::Vector2d::Zero();
-    model.Evaluate(x);
+    model.Evaluate(x, &factors);
     const int ch = model.channels;
     Vec3d normal = s.normal;
     for (int round = 0; round < options.irls_rounds; ++round) {
@@ -381,7 +383,7 @@ struct PixelFitter {
       if (round > 0 && previous.dot(normal) > std::cos(1e-2 * M_PI / 180)) break;
       // Cauchy weights from the unweighted residuals of the usable observations, at the new
       // normal: one weight per image, since a cast shadow or highlight affects every channel.
-      model.Residuals(usable.data(), residuals.data());
+      model.Residuals(factors, usable.data(), residuals.data());
       for (int j = 0; j < k; ++j) {
         double r2 = 0;
         for (int c = 0; c < ch; ++c) r2 += std::pow(residuals[j * ch + c] / scale, 2);
@@ -390,9 +392,8 @@ struct PixelFitter {
       // A chart far from its centre bends; re-centre it (the factors' derivatives change).
       if (x.norm() > 0.25 && round + 1 < options.irls_rounds) {
         model.Center(normal);
-        candidate.n0 = model.n0, candidate.t1 = model.t1, candidate.t2 = model.t2;
         x.setZero();
-        model.Evaluate(x);
+        model.Evaluate(x, &factors);
       }
     }
     s.normal = normal;
@@ -402,7 +403,7 @@ struct PixelFitter {
   // Σ log(1 + (r/σ)²) over the usable observations at the last fit's normal, with that pixel's
   // σ: what chooses between two starts.
   double RobustCost() {
-    model.Residuals(usable.data(), residuals.data());
+    model.Residuals(factors, usable.data(), residuals.data());
     double cost = 0;
     for (int i = 0; i < data.images * model.channels; ++i) {
       cost += std::log1p(std::pow(residuals[i] / scale, 2));
@@ -417,7 +418,7 @@ struct PixelFitter {
     const int k = data.images;
     std::vector<reflectance::LightFactors<double>>& f = values;
     f.resize(k);
-    for (int j = 0; j < k; ++j) f[j] = {model.factors[j].diffuse.a, model.factors[j].specular.a};
+    for (int j = 0; j < k; ++j) f[j] = {factors[j].diffuse.a, factors[j].specular.a};
     double sigma = 1;
     const std::array<double, 3> kd = internal::EliminatedAlbedo<double>(
         f, 3, [&](int c) { return ks[c]; }, [&](std::size_t j, int c) { return y_rgb[3 * j + c]; },
@@ -437,8 +438,6 @@ struct PixelFitter {
     }
     s.residual = std::sqrt(sq / std::max(used, 1));
   }
-
-  std::vector<reflectance::LightFactors<double>> values;  // the factors' values, reused
 };
 
 // Global fit of ks (RGB), log-shininess and the ambient term Ia⊙ka (RGB) over sampled pixels,
