@@ -280,6 +280,7 @@ struct PixelFitter {
   // bias the first start toward a local minimum) and keeps the better of the two.
   void FitWithRestart(std::size_t p, PixelSolution& s) {
     Fit(p, s);
+    if (std::isinf(options.restart_residual)) return;  // off (the default)
     if (!(s.residual > options.restart_residual * MeanObservation(p))) return;
     PixelSolution second = Woodham(data, p, darker, Eigen::Matrix3Xd(), order, false);
     if (second.status != PixelStatus::kSolved) return;
