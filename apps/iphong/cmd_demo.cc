@@ -13,8 +13,8 @@
 #include "integrate/integrate.h"
 #include "io/dataset.h"
 #include "io/image_io.h"
+#include "io/output_folder.h"
 #include "io/scene_file.h"
-#include "io/staging.h"
 #include "io/surface.h"
 #include "io/visualize.h"
 #include "iphong/commands.h"
@@ -169,18 +169,22 @@ void RunDemo(const DemoOptions& options) {
   }
   const render::RenderOutput dataset = render::Render(lit, file.options, true);
 
-  std::filesystem::create_directories(options.output_dir);
+  // The demo's folder is its own: running it again replaces its earlier output (and only that).
+  io::OutputFolderOptions folder;
+  folder.command = "demo";
+  folder.overwrite = true;
+  io::OutputFolder out(options.output_dir, folder);
   const std::string dir = options.output_dir + "/";
-  io::WriteImage(dir + "sphere.png", rendered.image);
-  io::WriteImage(dir + "shading.png", strip);
-  io::WriteImage(dir + "materials.png", RenderPresetSheet(128, DemoLighting()));
+  io::WriteImage(out.file("sphere.png"), rendered.image);
+  io::WriteImage(out.file("shading.png"), strip);
+  io::WriteImage(out.file("materials.png"), RenderPresetSheet(128, DemoLighting()));
   io::OutputSettings png;
   png.format = "png";
-  io::WriteRenderOutput(dir + "sphere-dataset", lit, file.options, dataset, png, true);
+  io::WriteRenderOutput(out, "sphere-dataset/", lit, file.options, dataset, png, true);
 
   // 4. The inverse: normals from the dataset just written (read back from disk), coefficients
   //    unknown, against the renderer's exact ground truth; Woodham beside it.
-  io::Dataset data_set = io::LoadDataset(dir + "sphere-dataset");
+  io::Dataset data_set = io::LoadDataset(out.folder("sphere-dataset"));
   std::vector<const float*> images;
   for (const ImageF& image : data_set.images) images.push_back(image.pixels.data());
   const solve::PhotometricData observations =
@@ -194,12 +198,11 @@ void RunDemo(const DemoOptions& options) {
       solve::CompareNormals(recovered.normals, data_set.normal_gt, data_set.mask);
   const solve::AngularErrorMetrics woodham_error =
       solve::CompareNormals(woodham.normals, data_set.normal_gt, data_set.mask);
-  std::filesystem::create_directories(dir + "normals");
-  io::WriteImage(dir + "normals/normals.png",
+  io::WriteImage(out.file("normals/normals.png"),
                  io::NormalMapPicture(recovered.normals, data_set.mask),
                  {16, io::Encoding::kLinear});
-  io::WriteImage(dir + "normals/normals.exr", recovered.normals);
-  io::WriteErrorMap(dir + "normals/error.png", phong_error.error_deg, data_set.mask, 10);
+  io::WriteImage(out.file("normals/normals.exr"), recovered.normals);
+  io::WriteErrorMap(out.file("normals/error.png"), phong_error.error_deg, data_set.mask, 10);
 
   // 5. Heights and a mesh from the recovered normals, against the renderer's depth.
   integrate::IntegrateOptions integration;
@@ -221,13 +224,12 @@ void RunDemo(const DemoOptions& options) {
     squared += e * e;
   }
   const double height_rmse = std::sqrt(squared / surface_pixels);
-  io::StagingDirectory surface_dir(dir + "surface");
   io::SurfaceFileOptions surface_files;
   surface_files.albedo = &recovered.albedo;
   const io::SurfaceFiles surface =
-      io::WriteSurfaceFiles(surface_dir, heights, recovered.normals, data_set.mask,
+      io::WriteSurfaceFiles(out, "surface/", heights, recovered.normals, data_set.mask,
                             io::FrameOf(integration), surface_files);
-  surface_dir.Commit();
+  out.Commit();
 
   std::printf("\nScan-line renderer, %zu-triangle sphere, Phong shading, %dx%d:\n", triangles,
               options.size, options.size);
@@ -266,7 +268,9 @@ void RunDemo(const DemoOptions& options) {
 void AddDemoCommand(CLI::App& app) {
   auto options = std::make_shared<DemoOptions>();
   auto* cmd = app.add_subcommand("demo", "Run iphong on a built-in scene and say what it wrote");
-  cmd->add_option("-o,--output", options->output_dir, "Output directory")->capture_default_str();
+  cmd->add_option("-o,--output", options->output_dir,
+                  "Output folder: new or empty, or an earlier demo output (replaced)")
+      ->capture_default_str();
   cmd->add_option("--size", options->size, "Sphere image size in pixels")->capture_default_str();
   cmd->callback([options] { RunDemo(*options); });
 }

@@ -1,17 +1,17 @@
 // `iphong integrate NORMALS -o DIR`: heights and a mesh from a normal map.
-#include <unistd.h>
-
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
 
 #include "integrate/integrate.h"
 #include "io/dataset.h"
+#include "io/files.h"
 #include "io/image_io.h"
-#include "io/staging.h"
+#include "io/output_folder.h"
 #include "io/surface.h"
 #include "io/visualize.h"
 #include "iphong/commands.h"
+#include "iphong/console.h"
 
 namespace iphong::cli {
 namespace {
@@ -24,6 +24,7 @@ struct IntegrateCommandOptions {
   std::vector<double> intrinsics;
   integrate::IntegrateOptions options;
   bool obj = false;
+  CommonOptions common;
 };
 
 struct NormalInput {
@@ -32,11 +33,8 @@ struct NormalInput {
   ImageF albedo;
 };
 
-Mask MaskFromImage(const std::string& path) {
-  const ImageF m = io::ReadImage(path);
-  Mask mask(m.width, m.height, false);
-  for (std::size_t p = 0; p < m.pixel_count(); ++p) mask.inside[p] = m.pixels[p * m.channels] > 0;
-  return mask;
+std::string SizeOf(int width, int height) {
+  return std::to_string(width) + "x" + std::to_string(height);
 }
 
 // A normal map file (EXR/TIFF floats, PNG pictures, Normal_gt.mat), the output directory of
@@ -44,14 +42,19 @@ Mask MaskFromImage(const std::string& path) {
 NormalInput ReadNormalInput(const IntegrateCommandOptions& o) {
   NormalInput in;
   const fs::path path(o.normals);
+  const MemoryLimit memory = o.common.memory();
+  std::error_code error;
+  if (!fs::exists(path, error)) throw std::runtime_error(o.normals + ": no such file or folder");
   if (fs::is_directory(path)) {
+    io::FinishInterruptedCommit(o.normals);  // never half of one run and half of another
     if (fs::exists(path / "normals.exr")) {
-      in.normals = io::ReadImage((path / "normals.exr").string());
+      in.normals = io::ReadImage((path / "normals.exr").string(), memory);
       if (fs::exists(path / "albedo.exr"))
-        in.albedo = io::ReadImage((path / "albedo.exr").string());
+        in.albedo = io::ReadImage((path / "albedo.exr").string(), memory);
     } else {
       io::DatasetLoadOptions load;
       load.load_images = false;
+      load.memory = memory;
       io::Dataset d = io::LoadDataset(o.normals, load);
       if (d.normal_gt.pixels.empty()) {
         throw std::runtime_error(o.normals + ": neither normals.exr nor a ground-truth normal map");
@@ -62,7 +65,7 @@ NormalInput ReadNormalInput(const IntegrateCommandOptions& o) {
   } else if (path.extension() == ".mat") {
     in.normals = io::ReadNormalMat(o.normals, "Normal_gt");
   } else {
-    ImageF image = io::ReadImage(o.normals);
+    ImageF image = io::ReadImage(o.normals, memory);
     if (image.channels < 3) throw std::runtime_error(o.normals + ": a normal map needs 3 channels");
     const std::string ext = path.extension().string();
     if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") {
@@ -80,13 +83,17 @@ NormalInput ReadNormalInput(const IntegrateCommandOptions& o) {
     }
   }
   if (!o.mask.empty()) {
-    in.mask = MaskFromImage(o.mask);
+    RequireFile(o.mask);
+    in.mask = io::ReadMask(o.mask, memory);
   } else if (in.mask.width == 0) {
     in.mask = NonZeroPixels(in.normals);
   } else if (in.mask.width == in.normals.width && in.mask.height == in.normals.height) {
     in.mask = NonZeroPixels(in.normals, &in.mask);  // dataset masks include pixels GT leaves 0
   }
-  if (!o.albedo.empty()) in.albedo = io::ReadImage(o.albedo);
+  if (!o.albedo.empty()) {
+    RequireFile(o.albedo);
+    in.albedo = io::ReadImage(o.albedo, memory);
+  }
   if (!in.albedo.pixels.empty() &&
       (in.albedo.width != in.normals.width || in.albedo.height != in.normals.height ||
        in.albedo.channels < 3)) {
@@ -107,42 +114,56 @@ void RunIntegrate(IntegrateCommandOptions& o) {
     options.perspective = true;
     options.intrinsics = {o.intrinsics[0], o.intrinsics[1], o.intrinsics[2], o.intrinsics[3]};
   }
-  if (auto m = options.Validate(); !m.empty()) throw std::runtime_error(m);
+  options.threads = o.common.threads;
+  if (auto m = options.Validate(); !m.empty()) throw std::invalid_argument(m);
+  // The output folder is checked before any work. It may be the `iphong normals` output it
+  // reads: integrate adds its files there, keeping the others.
+  io::OutputFolderOptions folder;
+  folder.command = "integrate";
+  folder.overwrite = o.common.overwrite;
+  folder.inputs = {o.normals, o.mask, o.albedo, o.depth_prior};
+  folder.joins = {"normals"};
+  io::OutputFolder out(o.output_dir, folder);
   const NormalInput in = ReadNormalInput(o);
   if (!o.depth_prior.empty()) {
-    options.depth_prior = io::ReadImage(o.depth_prior);
+    RequireFile(o.depth_prior);
+    options.depth_prior = io::ReadImage(o.depth_prior, o.common.memory());
     if (options.depth_prior.channels != 1) {
       throw std::runtime_error(o.depth_prior + ": the depth prior must have one channel");
     }
+    if (options.depth_prior.width != in.normals.width ||
+        options.depth_prior.height != in.normals.height) {
+      throw std::runtime_error(
+          o.depth_prior + ": is " + SizeOf(options.depth_prior.width, options.depth_prior.height) +
+          ", the normal map is " + SizeOf(in.normals.width, in.normals.height));
+    }
   }
-  const bool tty = ::isatty(2);
+  const bool tty = ErrIsTerminal();
   if (tty) {
     options.progress = [](double fraction) {
-      std::fprintf(stderr, "\rintegrating: %3.0f%%", 100 * fraction);
+      std::fprintf(Err(), "\rintegrating: %3.0f%%", 100 * fraction);
     };
   }
   integrate::IntegrateResult result;
   try {
     result = integrate::IntegrateNormals(in.normals, in.mask, options);
-    if (tty) std::fprintf(stderr, "\r%20s\r", "");
+    if (tty) std::fprintf(Err(), "\r%20s\r", "");
   } catch (const std::invalid_argument& e) {
     const std::string source = o.mask.empty() ? o.normals : o.normals + " with mask " + o.mask;
     throw std::runtime_error(source + ": " + e.what());
   }
-  io::StagingDirectory out(o.output_dir);
   io::SurfaceFileOptions files;
   files.obj = o.obj;
   files.albedo = in.albedo.pixels.empty() ? nullptr : &in.albedo;
   files.threads = options.threads;
   const io::SurfaceFiles written =
-      io::WriteSurfaceFiles(out, result, in.normals, in.mask, io::FrameOf(options), files);
+      io::WriteSurfaceFiles(out, "", result, in.normals, in.mask, io::FrameOf(options), files);
   out.Commit();
 
   const integrate::IntegrateSummary& s = result.summary;
   if (s.back_facing_pixels > 0) {
-    std::fprintf(stderr,
-                 "iphong: warning: %zu normals face away from the camera: taken as grazing\n",
-                 s.back_facing_pixels);
+    Warn(std::to_string(s.back_facing_pixels) +
+         " normals face away from the camera: taken as grazing");
   }
   std::printf("Integrated %zu pixels (%d part%s) with %s, %s: %.3f s (solve %.3f s%s)\n", s.pixels,
               s.components, s.components == 1 ? "" : "s", integrate::MethodName(s.method),
@@ -167,12 +188,13 @@ void AddIntegrateCommand(CLI::App& app) {
   cmd->add_option("normals", o->normals,
                   "Normal map (EXR/TIFF xyz, PNG picture, Normal_gt.mat), an `iphong normals` "
                   "output directory, or a dataset directory (its ground truth)")
-      ->required()
-      ->check(CLI::ExistingPath);
-  cmd->add_option("-o,--output", o->output_dir, "Output directory (replaced atomically)")
       ->required();
-  cmd->add_option("--mask", o->mask, "Mask image (nonzero = object; default: pixels with a normal)")
-      ->check(CLI::ExistingFile);
+  cmd->add_option("-o,--output", o->output_dir,
+                  "Output folder: new or empty, an `iphong normals` output (the files are added "
+                  "beside the normals), or an earlier integrate output with --overwrite")
+      ->required();
+  cmd->add_option("--mask", o->mask,
+                  "Mask image (nonzero = object; default: pixels with a normal)");
   cmd->add_option("--method", o->method,
                   "auto (dct on a full rectangle, else quadratic), quadratic, dct, fft, bilateral "
                   "(keeps depth discontinuities)")
@@ -190,8 +212,7 @@ void AddIntegrateCommand(CLI::App& app) {
       ->delimiter(',')
       ->expected(4);
   cmd->add_option("--depth-prior", o->depth_prior,
-                  "1-channel EXR of known heights (or depths with --intrinsics), NaN = unknown")
-      ->check(CLI::ExistingFile);
+                  "1-channel EXR of known heights (or depths with --intrinsics), NaN = unknown");
   cmd->add_option("--prior-weight", o->options.prior_weight, "Weight of the depth prior per pixel")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
@@ -209,8 +230,9 @@ void AddIntegrateCommand(CLI::App& app) {
   cmd->add_flag("--allow-back-facing", o->options.allow_back_facing,
                 "Treat normals with nz <= 0 (silhouette pixels) as grazing instead of an error");
   cmd->add_flag("--obj", o->obj, "Also write mesh.obj");
-  cmd->add_option("--threads", o->options.threads, "Threads (0 = all cores)")
-      ->check(CLI::NonNegativeNumber);
+  AddOverwriteOption(cmd, o->common);
+  AddThreadsOption(cmd, o->common);
+  AddMemoryOption(cmd, o->common);
   cmd->callback([o] { RunIntegrate(*o); });
 }
 

@@ -1,7 +1,5 @@
 // `iphong normals DATASET -o DIR`: per-pixel normals and albedo by inverting the Phong model;
 // with ground truth, the angular errors. `iphong eval EST.exr GT`: the same metrics for any map.
-#include <unistd.h>
-
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -10,12 +8,13 @@
 #include "core/timing.h"
 #include "integrate/integrate.h"
 #include "io/dataset.h"
+#include "io/files.h"
 #include "io/image_io.h"
-#include "io/staging.h"
+#include "io/output_folder.h"
 #include "io/surface.h"
-#include "io/text_file.h"
 #include "io/visualize.h"
 #include "iphong/commands.h"
+#include "iphong/console.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
 
@@ -36,7 +35,7 @@ struct NormalsCommandOptions {
   int specular_clusters = 1;
   bool uniform_specular = false;
   double specular_prior = solve::NormalOptions{}.specular_prior;
-  int threads = 0;
+  CommonOptions common;
 };
 
 nlohmann::json MetricsJson(const solve::AngularErrorMetrics& m) {
@@ -54,16 +53,24 @@ double ErrorScale(const solve::AngularErrorMetrics& m) {
 
 void RunNormals(const NormalsCommandOptions& o) {
   const auto total_start = Clock::now();
-  const bool tty = ::isatty(2);
-  io::ObservationSet loaded = io::LoadObservations(o.dataset);
+  const bool tty = ErrIsTerminal();
+  RequireFolder(o.dataset);
+  // The output folder is checked first: a refusal costs nothing.
+  io::OutputFolderOptions folder;
+  folder.command = "normals";
+  folder.overwrite = o.common.overwrite;
+  folder.inputs = {o.dataset};
+  io::OutputFolder out(o.output_dir, folder);
+  io::DatasetLoadOptions load;
+  load.threads = o.common.threads;
+  load.memory = o.common.memory();
+  io::ObservationSet loaded = io::LoadObservations(o.dataset, load);
   io::Dataset& dataset = loaded.dataset;
-  for (const std::string& warning : dataset.warnings) {
-    std::fprintf(stderr, "iphong: warning: %s\n", warning.c_str());
-  }
+  for (const std::string& warning : dataset.warnings) Warn(warning);
   solve::NormalOptions options;
   options.discard_dark = o.discard_dark;
   options.discard_bright = o.discard_bright;
-  options.threads = o.threads;
+  options.threads = o.common.threads;
   options.robust_scale = o.robust_scale;
   options.irls_rounds = o.irls_rounds;
   options.color_residuals = !o.fast;
@@ -81,7 +88,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   if (o.model) options.model = reflectance::ParseLobe(*o.model);
   if (tty) {
     options.progress = [](double fraction) {
-      std::fprintf(stderr, "\rsolving normals: %3.0f%%", 100 * fraction);
+      std::fprintf(Err(), "\rsolving normals: %3.0f%%", 100 * fraction);
     };
   }
 
@@ -97,7 +104,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   }
   const solve::NormalResult result = solve::RecoverNormals(data, options);
   const ImageF& ambiguity = result.ambiguity_deg;
-  if (tty) std::fprintf(stderr, "\r%30s\r", "");
+  if (tty) std::fprintf(Err(), "\r%30s\r", "");
 
   nlohmann::json metrics;
   metrics["dataset"] = o.dataset;
@@ -126,7 +133,6 @@ void RunNormals(const NormalsCommandOptions& o) {
     metrics.update(MetricsJson(*errors));
   }
 
-  io::StagingDirectory out(o.output_dir);
   io::WriteImage(out.file("normals.exr"), result.normals);
   io::WriteImage(out.file("normals.png"),
                  io::NormalMapPicture(result.normals, dataset.mask, o.convention == "directx"),
@@ -174,12 +180,12 @@ void RunNormals(const NormalsCommandOptions& o) {
     }
     integrate::IntegrateOptions integration;
     integration.allow_back_facing = true;
-    integration.threads = o.threads;
+    integration.threads = o.common.threads;
     heights = integrate::IntegrateNormals(result.normals, with_normal, integration);
     io::SurfaceFileOptions files;
     files.albedo = &result.albedo;
-    files.threads = o.threads;
-    surface = io::WriteSurfaceFiles(out, heights, result.normals, with_normal,
+    files.threads = o.common.threads;
+    surface = io::WriteSurfaceFiles(out, "", heights, result.normals, with_normal,
                                     io::FrameOf(integration), files);
     metrics["integrate_seconds"] = heights.summary.total_seconds;
   }
@@ -250,38 +256,75 @@ void RunNormals(const NormalsCommandOptions& o) {
 struct EvalOptions {
   std::string estimate, ground_truth, mask;
   std::string error_map;
+  CommonOptions common;
 };
 
+std::string SizeOf(const ImageF& image) {
+  return std::to_string(image.width) + "x" + std::to_string(image.height);
+}
+
+// A normal map read for comparison: 3 channels (x, y, z) at least.
+ImageF ReadNormalMap(const std::string& path, const MemoryLimit& memory) {
+  ImageF image = std::filesystem::path(path).extension() == ".mat"
+                     ? io::ReadNormalMat(path, "Normal_gt")
+                     : io::ReadImage(path, memory);
+  if (image.channels < 3) {
+    throw std::runtime_error(path + ": has " + std::to_string(image.channels) +
+                             " channel(s); a normal map needs 3 (x, y, z)");
+  }
+  if (image.channels > 3) {
+    ImageF xyz(image.width, image.height, 3);
+    for (std::size_t p = 0; p < image.pixel_count(); ++p)
+      for (int c = 0; c < 3; ++c) xyz.pixels[3 * p + c] = image.pixels[p * image.channels + c];
+    image = std::move(xyz);
+  }
+  return image;
+}
+
 void RunEval(const EvalOptions& o) {
-  const ImageF estimate = io::ReadImage(o.estimate);
+  RequireFile(o.estimate);
+  const MemoryLimit memory = o.common.memory();
+  const ImageF estimate = ReadNormalMap(o.estimate, memory);
   ImageF truth;
   Mask mask;
+  std::string truth_name = o.ground_truth;
   if (std::filesystem::is_directory(o.ground_truth)) {
     io::DatasetLoadOptions load;
     load.load_images = false;
+    load.memory = memory;
     io::Dataset d = io::LoadDataset(o.ground_truth, load);
-    if (d.normal_gt.pixels.empty()) throw std::runtime_error(o.ground_truth + ": no ground truth");
+    if (d.normal_gt.pixels.empty()) {
+      throw std::runtime_error(o.ground_truth + ": no ground truth (Normal_gt.mat or normal.txt)");
+    }
     truth = d.normal_gt;
-    mask = d.mask.width > 0 ? d.mask : Mask(truth.width, truth.height, true);
-  } else if (std::filesystem::path(o.ground_truth).extension() == ".mat") {
-    truth = io::ReadNormalMat(o.ground_truth, "Normal_gt");
+    truth_name = o.ground_truth + "/Normal_gt.mat";
+    if (d.mask.width == truth.width && d.mask.height == truth.height) mask = d.mask;
   } else {
-    truth = io::ReadImage(o.ground_truth);
+    RequireFile(o.ground_truth);
+    truth = ReadNormalMap(o.ground_truth, memory);
+  }
+  if (estimate.width != truth.width || estimate.height != truth.height) {
+    throw std::runtime_error(o.estimate + ": is " + SizeOf(estimate) + ", the ground truth " +
+                             truth_name + " is " + SizeOf(truth));
   }
   if (mask.width == 0) mask = Mask(truth.width, truth.height, true);
   if (!o.mask.empty()) {
-    const ImageF m = io::ReadImage(o.mask);
-    mask = Mask(m.width, m.height, false);
-    for (std::size_t p = 0; p < m.pixel_count(); ++p) mask.inside[p] = m.pixels[p * m.channels] > 0;
-  }
-  if (estimate.width != truth.width || estimate.height != truth.height) {
-    throw std::runtime_error(o.estimate + ": is " + std::to_string(estimate.width) + "x" +
-                             std::to_string(estimate.height) + ", the ground truth " +
-                             std::to_string(truth.width) + "x" + std::to_string(truth.height));
+    RequireFile(o.mask);
+    mask = io::ReadMask(o.mask, memory);
+    if (mask.width != truth.width || mask.height != truth.height) {
+      throw std::runtime_error(o.mask + ": is " + std::to_string(mask.width) + "x" +
+                               std::to_string(mask.height) + ", the normal maps are " +
+                               SizeOf(truth));
+    }
   }
   const solve::AngularErrorMetrics m = solve::CompareNormals(estimate, truth, mask);
+  if (!o.error_map.empty()) {
+    io::WriteSingleOutputFile(o.error_map, o.common.overwrite, {o.estimate, o.ground_truth, o.mask},
+                              [&](const std::string& temp) {
+                                io::WriteErrorMap(temp, m.error_deg, mask, ErrorScale(m));
+                              });
+  }
   std::printf("%s\n", MetricsJson(m).dump(2).c_str());
-  if (!o.error_map.empty()) io::WriteErrorMap(o.error_map, m.error_deg, mask, ErrorScale(m));
 }
 
 }  // namespace
@@ -289,10 +332,9 @@ void RunEval(const EvalOptions& o) {
 void AddNormalsCommand(CLI::App& app) {
   auto o = std::make_shared<NormalsCommandOptions>();
   auto* cmd = app.add_subcommand("normals", "Recover normals and albedo from a dataset directory");
-  cmd->add_option("dataset", o->dataset, "Dataset directory (DiLiGenT layout)")
-      ->required()
-      ->check(CLI::ExistingDirectory);
-  cmd->add_option("-o,--output", o->output_dir, "Output directory (replaced atomically)")
+  cmd->add_option("dataset", o->dataset, "Dataset folder (DiLiGenT layout)")->required();
+  cmd->add_option("-o,--output", o->output_dir,
+                  "Output folder: new or empty, or an earlier normals output with --overwrite")
       ->required();
   cmd->add_option("--model", o->model, "Reflectance model (default: material.json's, else phong)")
       ->check(CLI::IsMember({"phong", "blinn-phong", "lambert"}));
@@ -334,21 +376,22 @@ void AddNormalsCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--integrate", o->integrate,
                 "Also integrate the normals: height.exr, mesh.ply (albedo colours), height.png");
-  cmd->add_option("--threads", o->threads, "Threads (0 = all cores)")
-      ->check(CLI::NonNegativeNumber);
+  AddOverwriteOption(cmd, o->common);
+  AddThreadsOption(cmd, o->common);
+  AddMemoryOption(cmd, o->common);
   cmd->callback([o] { RunNormals(*o); });
 
   auto e = std::make_shared<EvalOptions>();
   auto* eval = app.add_subcommand("eval", "Angular error of a normal map against ground truth");
-  eval->add_option("estimate", e->estimate, "Estimated normals (EXR, xyz)")
-      ->required()
-      ->check(CLI::ExistingFile);
+  eval->add_option("estimate", e->estimate, "Estimated normals (EXR, xyz)")->required();
   eval->add_option("ground_truth", e->ground_truth,
                    "Dataset directory, Normal_gt.mat or a normal map (EXR)")
-      ->required()
-      ->check(CLI::ExistingPath);
+      ->required();
   eval->add_option("--mask", e->mask, "Mask image (nonzero = evaluate)");
-  eval->add_option("--error-map", e->error_map, "Write the error picture (PNG) here");
+  eval->add_option("--error-map", e->error_map,
+                   "Write the error picture (PNG) here (a new file, or --overwrite)");
+  eval->add_flag("--overwrite", e->common.overwrite, "Replace an existing --error-map file");
+  AddMemoryOption(eval, e->common);
   eval->callback([e] { RunEval(*e); });
 }
 

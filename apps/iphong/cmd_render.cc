@@ -4,6 +4,8 @@
 #include <optional>
 
 #include "io/dataset.h"
+#include "io/files.h"
+#include "io/output_folder.h"
 #include "io/scene_file.h"
 #include "iphong/commands.h"
 
@@ -18,11 +20,12 @@ struct RenderCommandOptions {
   std::optional<int> bits, supersampling, seed;
   std::optional<double> noise_sigma;
   bool shadows = false;
-  int threads = 0;
+  CommonOptions common;
 };
 
 void RunRender(const RenderCommandOptions& o) {
-  io::SceneFile file = io::LoadSceneFile(o.scene_path);
+  RequireFile(o.scene_path);
+  io::SceneFile file = io::LoadSceneFile(o.scene_path, o.common.memory());
   if (o.format) file.output.format = *o.format;
   if (o.bits) file.output.bits = *o.bits;
   if (o.encoding)
@@ -32,10 +35,29 @@ void RunRender(const RenderCommandOptions& o) {
   if (o.shadows) file.options.shadows = true;
   if (o.noise_sigma) file.options.noise.gaussian_sigma = *o.noise_sigma;
   if (o.seed) file.options.noise.seed = static_cast<std::uint64_t>(*o.seed);
-  file.options.threads = o.threads;
+  file.options.threads = o.common.threads;
+  file.options.memory = o.common.memory();
+  if (o.per_light) {
+    if (std::string m = io::CheckDatasetLights(file.scene); !m.empty()) {
+      throw std::runtime_error(o.scene_path + ": " + m);
+    }
+  }
+  // The folder is checked before the render: a refusal costs nothing.
+  io::OutputFolderOptions folder;
+  folder.command = "render";
+  folder.overwrite = o.common.overwrite;
+  folder.inputs = file.inputs;
+  folder.inputs.push_back(o.scene_path);
+  io::OutputFolder output(o.output_dir, folder);
 
   const render::RenderOutput out = render::Render(file.scene, file.options, o.per_light);
-  io::WriteRenderOutput(o.output_dir, file.scene, file.options, out, file.output, o.per_light);
+  if (out.mask.count() == 0) {
+    throw std::runtime_error(o.scene_path +
+                             ": nothing is visible: every object is outside the camera's view "
+                             "(check the camera and the objects' positions and sizes)");
+  }
+  io::WriteRenderOutput(output, "", file.scene, file.options, out, file.output, o.per_light);
+  output.Commit();
 
   std::size_t triangles = 0;
   for (const auto& object : file.scene.objects) triangles += object.mesh.triangle_count();
@@ -60,10 +82,9 @@ void RunRender(const RenderCommandOptions& o) {
 void AddRenderCommand(CLI::App& app) {
   auto o = std::make_shared<RenderCommandOptions>();
   auto* cmd = app.add_subcommand("render", "Render a scene file; --per-light writes a dataset");
-  cmd->add_option("scene", o->scene_path, "Scene file (JSON)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  cmd->add_option("-o,--output", o->output_dir, "Output directory (replaced atomically)")
+  cmd->add_option("scene", o->scene_path, "Scene file (JSON)")->required();
+  cmd->add_option("-o,--output", o->output_dir,
+                  "Output folder: new or empty, or an earlier render output with --overwrite")
       ->required();
   cmd->add_flag("--per-light", o->per_light,
                 "One image per light in the DiLiGenT layout, with light files");
@@ -78,9 +99,10 @@ void AddRenderCommand(CLI::App& app) {
   cmd->add_flag("--shadows", o->shadows, "Cast shadows (one shadow map per light)");
   cmd->add_option("--noise-sigma", o->noise_sigma, "Gaussian noise sigma")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--seed", o->seed, "Noise seed");
-  cmd->add_option("--threads", o->threads, "Threads (0 = all cores)")
-      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--seed", o->seed, "Noise seed")->check(CLI::NonNegativeNumber);
+  AddOverwriteOption(cmd, o->common);
+  AddThreadsOption(cmd, o->common);
+  AddMemoryOption(cmd, o->common);
   cmd->callback([o] { RunRender(*o); });
 }
 

@@ -3,8 +3,43 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <string>
+
+#include "core/resources.h"
 
 namespace iphong::cli {
+
+// Exit codes (README, "Command line"); a signal ends the process as that signal (128 + n).
+constexpr int kExitInput = 1;      // a file or value is wrong
+constexpr int kExitUsage = 2;      // the command line is wrong
+constexpr int kExitResources = 3;  // the request exceeds the memory limit
+constexpr int kExitOutput = 4;     // the output cannot be written (folder refused, disk full)
+constexpr int kExitInternal = 70;  // a bug in iphong
+constexpr const char* kExitCodes =
+    "Exit codes: 0 done; 1 bad input (a file or value); 2 bad command line; 3 over the memory "
+    "limit (--max-memory); 4 output not written (folder refused, disk full); 70 internal error; "
+    "130/143 interrupted (SIGINT/SIGTERM). An error is one line on stderr, naming the file; a "
+    "failed or interrupted run leaves its output folder as it was.";
+
+// Flags most commands share.
+struct CommonOptions {
+  int threads = 0;
+  double max_memory_gb = 0;  // 0 = three quarters of the machine's memory
+  bool overwrite = false;
+
+  MemoryLimit memory() const {
+    MemoryLimit limit;
+    limit.bytes = static_cast<std::uint64_t>(max_memory_gb * 1e9);
+    return limit;
+  }
+};
+void AddThreadsOption(CLI::App* cmd, CommonOptions& common);
+void AddMemoryOption(CLI::App* cmd, CommonOptions& common);
+void AddOverwriteOption(CLI::App* cmd, CommonOptions& common);
+
+// One-line errors naming the path: "PATH: no such folder", "PATH: is a file, not a folder".
+void RequireFolder(const std::string& path);
+void RequireFile(const std::string& path);
 
 void AddDemoCommand(CLI::App& app);
 void AddMaterialsCommand(CLI::App& app);

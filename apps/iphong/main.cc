@@ -1,23 +1,58 @@
 #include <exception>
-#include <iostream>
+#include <new>
 
+#include "core/errors.h"
 #include "core/version.h"
 #include "iphong/commands.h"
+#include "iphong/console.h"
+
+namespace {
+
+// The subcommand a failed parse was working on, for "see iphong CMD --help".
+std::string ParsedCommand(const CLI::App& app) {
+  for (const CLI::App* sub : app.get_subcommands()) return sub->get_name();
+  return "";
+}
+
+int Fail(const std::string& message, int code) {
+  std::fprintf(iphong::cli::Err(), "iphong: error: %s\n", iphong::OneLine(message).c_str());
+  return code;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
+  iphong::cli::SetUpConsole();
   CLI::App app{
       "iphong: surface normals, heights and materials from photographs by inverting the Phong "
       "reflection model, and a forward Phong renderer with exact ground truth."};
   app.set_version_flag("--version", std::string("iphong ") + iphong::kVersion);
   app.require_subcommand(1);
+  app.footer(iphong::cli::kExitCodes);
   iphong::cli::AddAllCommands(app);
+  int code = 0;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    const std::string command = ParsedCommand(app);
+    code = Fail((command.empty() ? "" : command + ": ") + e.what() + " (see iphong " +
+                    (command.empty() ? "" : command + " ") + "--help)",
+                iphong::cli::kExitUsage);
+  } catch (const iphong::ResourceError& e) {
+    code = Fail(e.what(), iphong::cli::kExitResources);
+  } catch (const iphong::OutputError& e) {
+    code = Fail(e.what(), iphong::cli::kExitOutput);
+  } catch (const std::bad_alloc&) {
+    code = Fail("out of memory (lower --max-memory, or free memory)", iphong::cli::kExitResources);
+  } catch (const std::invalid_argument& e) {
+    code = Fail(e.what(), iphong::cli::kExitInput);
+  } catch (const std::logic_error& e) {
+    code = Fail(std::string("internal error (please report it): ") + e.what(),
+                iphong::cli::kExitInternal);
   } catch (const std::exception& e) {
-    std::cerr << "iphong: error: " << e.what() << "\n";
-    return 1;
+    code = Fail(e.what(), iphong::cli::kExitInput);
   }
-  return 0;
+  if (std::fflush(stdout) != 0 && code == 0) code = iphong::cli::kExitOutput;
+  return code;
 }

@@ -4,13 +4,17 @@
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
+#include <system_error>
 #include <thread>
 #include <vector>
 
 namespace iphong {
 
+// Requests beyond this are clamped: more threads than this only cost memory and start-up.
+constexpr int kMaxThreads = 1024;
+
 inline int ResolveThreads(int threads) {
-  if (threads > 0) return threads;
+  if (threads > 0) return std::min(threads, kMaxThreads);
   const unsigned hardware = std::thread::hardware_concurrency();
   return hardware == 0 ? 1 : static_cast<int>(hardware);
 }
@@ -36,7 +40,15 @@ void ParallelFor(std::size_t begin, std::size_t end, std::size_t chunk, int thre
   }
   std::vector<std::thread> pool;
   pool.reserve(workers - 1);
-  for (int w = 1; w < workers; ++w) pool.emplace_back(work);
+  for (int w = 1; w < workers; ++w) {
+    // Under a process or memory limit a thread may not start: the chunks are shared, so the
+    // threads that did start (at least this one) do all the work.
+    try {
+      pool.emplace_back(work);
+    } catch (const std::system_error&) {
+      break;
+    }
+  }
   work();
   for (auto& t : pool) t.join();
 }

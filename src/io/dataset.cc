@@ -1,18 +1,23 @@
 #include "io/dataset.h"
 
+#include <fcntl.h>
 #include <matio.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
+
+#include "core/errors.h"
 
 #include "core/parallel.h"
+#include "io/dataset_text.h"
+#include "io/files.h"
 #include "io/json_reader.h"
-#include "io/staging.h"
-#include "io/text_file.h"
+#include "io/output_folder.h"
 #include "io/visualize.h"
 
 namespace iphong::io {
@@ -24,46 +29,8 @@ namespace {
                            message);
 }
 
-// Non-empty lines of a text file, with their line numbers.
-std::vector<std::pair<int, std::string>> ReadLines(const fs::path& path) {
-  std::ifstream file(path);
-  if (!file) Fail(path, "cannot open");
-  std::vector<std::pair<int, std::string>> lines;
-  std::string line;
-  for (int number = 1; std::getline(file, line); ++number) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.find_first_not_of(" \t") == std::string::npos) continue;
-    lines.emplace_back(number, line);
-  }
-  return lines;
-}
-
-std::vector<Vec3d> ReadTriples(const fs::path& path, std::size_t expected) {
-  const auto lines = ReadLines(path);
-  std::vector<Vec3d> triples;
-  for (const auto& [number, line] : lines) {
-    // strtod, unlike operator>>, reads "nan" and "inf", so they get their own message.
-    Vec3d v;
-    const char* p = line.c_str();
-    int count = 0;
-    for (; count < 4; ++count) {
-      char* end = nullptr;
-      const double value = std::strtod(p, &end);
-      if (end == p) break;
-      if (count < 3) v[count] = value;
-      p = end;
-    }
-    if (count != 3 || std::string(p).find_first_not_of(" \t") != std::string::npos) {
-      Fail(path, "expected 3 numbers, got '" + line + "'", number);
-    }
-    if (!v.allFinite()) Fail(path, "not a finite number", number);
-    triples.push_back(v);
-  }
-  if (triples.size() != expected) {
-    Fail(path, "has " + std::to_string(triples.size()) + " lines for " + std::to_string(expected) +
-                   " images in filenames.txt");
-  }
-  return triples;
+std::string Size(int width, int height) {
+  return std::to_string(width) + "x" + std::to_string(height);
 }
 
 ImageF ToRgb(ImageF image) {
@@ -75,41 +42,6 @@ ImageF ToRgb(ImageF image) {
     }
   }
   return rgb;
-}
-
-ImageF ReadNormalText(const fs::path& path, int width, int height) {
-  const auto lines = ReadLines(path);
-  if (lines.size() != static_cast<std::size_t>(width) * height) {
-    Fail(path, "has " + std::to_string(lines.size()) + " lines, expected " +
-                   std::to_string(width * height) + " (width x height)");
-  }
-  ImageF normals(width, height, 3);
-  for (std::size_t p = 0; p < lines.size(); ++p) {
-    std::istringstream in(lines[p].second);
-    double n[3];
-    if (!(in >> n[0] >> n[1] >> n[2])) Fail(path, "expected 3 numbers", lines[p].first);
-    for (int c = 0; c < 3; ++c) normals.pixels[3 * p + c] = static_cast<float>(n[c]);
-  }
-  return normals;
-}
-
-DatasetMaterial ParseMaterialJson(const fs::path& path) {
-  const nlohmann::json document = JsonReader::Parse(ReadTextFile(path.string()), path.string());
-  const JsonReader j(document, path.string());
-  j.OnlyKeys({"model", "ambient", "ka", "kd", "ks", "shininess", "comment"});
-  DatasetMaterial m;
-  try {
-    m.model = reflectance::ParseLobe(j.String("model", "phong"));
-  } catch (const std::invalid_argument& e) {
-    j.Field("model").Fail(e.what());
-  }
-  m.ambient = j.Rgb("ambient", Vec3d::Ones());
-  m.kd_known = j.Has("kd");
-  reflectance::Material unknown;  // ka, ks 0, shininess 1; kd only a placeholder when absent
-  unknown.kd = Vec3d::Ones();
-  m.material = ReadMaterialCoefficients(j, unknown);
-  if ((m.ambient.array() < 0).any()) j.Field("ambient").Fail("must be >= 0");
-  return m;
 }
 
 std::string Triples(const std::vector<Vec3d>& values) {
@@ -155,7 +87,74 @@ nlohmann::json MaterialJson(const render::Scene& scene, const render::RenderOpti
 bool DatasetIsSrgb(const fs::path& dir) {
   if (!fs::exists(dir / "render.json")) return false;
   const std::string path = (dir / "render.json").string();
-  return JsonReader::Parse(ReadTextFile(path), path).value("encoding", "linear") == "srgb";
+  const nlohmann::json document = JsonReader::Parse(ReadTextFile(path), path);
+  const JsonReader j(document, path);
+  const std::string encoding = j.String("encoding", "linear");
+  if (encoding != "linear" && encoding != "srgb")
+    j.Field("encoding").Fail("expected linear or srgb");
+  return encoding == "srgb";
+}
+
+// A MAT-file (level 5) is a 128-byte header and then data elements, each an 8-byte tag (type,
+// byte count) and its bytes. matio reads a cut-off compressed element as zeros without a word, so
+// the elements are walked first: one that runs past the end of the file is an error.
+void CheckMat5Complete(const std::string& path) {
+  const std::uint64_t file_size = RequireRegularFile(path);
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) Fail(path, std::string("cannot open: ") + std::strerror(errno));
+  struct Close {
+    int fd;
+    ~Close() { ::close(fd); }
+  } closer{fd};
+  char header[128];
+  if (file_size < 128 || ::pread(fd, header, 128, 0) != 128) {
+    Fail(path, "too short for a MATLAB file (truncated?)");
+  }
+  if (std::string(header, 10) == "MATLAB 7.3") return;         // HDF5: its own checks apply
+  const bool swap = header[126] == 'M' && header[127] == 'I';  // written big-endian
+  auto word = [&](const unsigned char* b) {
+    std::uint32_t v = 0;
+    for (int k = 0; k < 4; ++k) v |= static_cast<std::uint32_t>(b[swap ? 3 - k : k]) << (8 * k);
+    return v;
+  };
+  for (std::uint64_t at = 128; at < file_size;) {
+    unsigned char tag[8];
+    if (at + 8 > file_size || ::pread(fd, tag, 8, static_cast<off_t>(at)) != 8) {
+      Fail(path, "ends inside a data element: truncated");
+    }
+    const std::uint32_t type = word(tag), count = word(tag + 4);
+    if (type >> 16 != 0) {  // small data element: type and count in one word, 4 bytes of data
+      at += 8;
+      continue;
+    }
+    // Uncompressed elements are padded to 8 bytes (the file's last one may end unpadded).
+    const std::uint64_t size = count;
+    if (at + 8 + size > file_size) {
+      Fail(path, "a data element runs past the end of the file: truncated");
+    }
+    at += 8 + (type == 15 ? size : (size + 7) / 8 * 8);
+  }
+}
+
+// Ground truth must be a map of unit normals (0 outside the object), not zeros or noise.
+void CheckNormalMap(const ImageF& normals, const std::string& path) {
+  std::size_t unit = 0;
+  for (std::size_t p = 0; p < normals.pixel_count(); ++p) {
+    const float* n = normals.pixels.data() + 3 * p;
+    if (!std::isfinite(n[0]) || !std::isfinite(n[1]) || !std::isfinite(n[2])) {
+      Fail(path, "not a finite number at pixel (" + std::to_string(p % normals.width) + ", " +
+                     std::to_string(p / normals.width) + ")");
+    }
+    const double norm = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
+    if (norm == 0) continue;
+    if (std::abs(norm - 1) > 0.05) {
+      Fail(path, "is not a normal map: the vector at pixel (" + std::to_string(p % normals.width) +
+                     ", " + std::to_string(p / normals.width) + ") has length " +
+                     std::to_string(norm) + " (unit normals, 0 outside the object expected)");
+    }
+    ++unit;
+  }
+  if (unit == 0) Fail(path, "holds no normal (all zeros): empty or truncated");
 }
 
 }  // namespace
@@ -167,38 +166,66 @@ void WriteNormalMat(const std::string& path, const std::string& variable, const 
     for (std::size_t c = 0; c < w; ++c)
       for (std::size_t k = 0; k < 3; ++k)
         data[r + h * (c + w * k)] = normals.pixels[3 * (r * w + c) + k];  // MATLAB: column-major
-  WriteFileAtomically(path, [&](const std::string& temp) -> std::string {
-    mat_t* mat = Mat_CreateVer(temp.c_str(), nullptr, MAT_FT_MAT5);
-    if (mat == nullptr) return "cannot create the MATLAB file";
-    std::size_t dims[3] = {h, w, 3};
-    matvar_t* var =
-        Mat_VarCreate(variable.c_str(), MAT_C_DOUBLE, MAT_T_DOUBLE, 3, dims, data.data(), 0);
-    const bool ok = var != nullptr && Mat_VarWrite(mat, var, MAT_COMPRESSION_ZLIB) == 0;
-    if (var) Mat_VarFree(var);
-    Mat_Close(mat);
-    return ok ? "" : "cannot write variable " + variable;
-  });
+  // matio writes only to paths and can report success on a full disk: the file is synced, then
+  // read back and compared value by value.
+  mat_t* mat = Mat_CreateVer(path.c_str(), nullptr, MAT_FT_MAT5);
+  if (mat == nullptr) throw OutputError(path + ": cannot write: cannot create the MATLAB file");
+  std::size_t dims[3] = {h, w, 3};
+  matvar_t* var =
+      Mat_VarCreate(variable.c_str(), MAT_C_DOUBLE, MAT_T_DOUBLE, 3, dims, data.data(), 0);
+  const bool ok = var != nullptr && Mat_VarWrite(mat, var, MAT_COMPRESSION_ZLIB) == 0;
+  if (var) Mat_VarFree(var);
+  if (Mat_Close(mat) != 0 || !ok) {
+    throw OutputError(path + ": cannot write: matio could not write variable " + variable);
+  }
+  SyncWrittenFile(path);
+  bool same = false;
+  try {
+    const ImageF back = ReadNormalMat(path, variable);
+    same = back.width == normals.width && back.height == normals.height &&
+           back.pixels == normals.pixels;
+  } catch (const std::exception&) {
+  }
+  if (!same) throw OutputError(path + ": cannot write: the file read back differs (disk full?)");
 }
 
 ImageF ReadNormalMat(const std::string& path, const std::string& variable) {
+  CheckMat5Complete(path);
   mat_t* mat = Mat_Open(path.c_str(), MAT_ACC_RDONLY);
   if (mat == nullptr) Fail(path, "not a MATLAB file matio can read");
+  matvar_t* info = Mat_VarReadInfo(mat, variable.c_str());
+  if (info == nullptr) {
+    Mat_Close(mat);
+    Fail(path, "has no variable " + variable);
+  }
+  const bool shape_ok = info->rank == 3 && info->dims[2] == 3 && !info->isComplex &&
+                        info->dims[0] > 0 && info->dims[1] > 0 &&
+                        info->dims[0] * info->dims[1] <= (std::size_t{1} << 31) &&
+                        (info->class_type == MAT_C_DOUBLE || info->class_type == MAT_C_SINGLE);
+  Mat_VarFree(info);
+  if (!shape_ok) {
+    Mat_Close(mat);
+    Fail(path, variable + " must be a real H x W x 3 array of double or single");
+  }
   matvar_t* var = Mat_VarRead(mat, variable.c_str());
   Mat_Close(mat);
-  if (var == nullptr) Fail(path, "has no variable " + variable);
+  if (var == nullptr || var->data == nullptr) {
+    if (var) Mat_VarFree(var);
+    Fail(path, "cannot read variable " + variable + " (corrupt file?)");
+  }
   struct Free {
     matvar_t* v;
     ~Free() { Mat_VarFree(v); }
   } free_var{var};
-  if (var->rank != 3 || var->dims[2] != 3 || var->isComplex) {
-    Fail(path, variable + " must be a real H x W x 3 array");
-  }
   const std::size_t h = var->dims[0], w = var->dims[1];
+  const std::size_t element = var->class_type == MAT_C_DOUBLE ? sizeof(double) : sizeof(float);
+  if (var->rank != 3 || var->dims[2] != 3 || var->nbytes < h * w * 3 * element) {
+    Fail(path, variable + " holds fewer values than its size says (corrupt file?)");
+  }
   ImageF normals(static_cast<int>(w), static_cast<int>(h), 3);
   auto value = [&](std::size_t i) -> double {
-    if (var->class_type == MAT_C_DOUBLE) return static_cast<const double*>(var->data)[i];
-    if (var->class_type == MAT_C_SINGLE) return static_cast<const float*>(var->data)[i];
-    Fail(path, variable + " must be double or single");
+    return var->class_type == MAT_C_DOUBLE ? static_cast<const double*>(var->data)[i]
+                                           : static_cast<const float*>(var->data)[i];
   };
   for (std::size_t r = 0; r < h; ++r)
     for (std::size_t c = 0; c < w; ++c)
@@ -209,115 +236,120 @@ ImageF ReadNormalMat(const std::string& path, const std::string& variable) {
 
 Dataset LoadDataset(const std::string& directory, const DatasetLoadOptions& options) {
   const fs::path dir(directory);
-  if (!fs::is_directory(dir)) Fail(dir, "not a directory");
+  std::error_code error;
+  if (!fs::is_directory(dir, error)) {
+    Fail(dir, fs::exists(dir, error) ? "not a folder (a dataset is a folder)" : "no such folder");
+  }
+  FinishInterruptedCommit(directory);  // an iphong render output cut off while committing
   Dataset d;
   d.directory = directory;
-  for (const auto& [number, line] : ReadLines(dir / "filenames.txt")) {
-    const auto begin = line.find_first_not_of(" \t"), end = line.find_last_not_of(" \t");
-    d.filenames.push_back(line.substr(begin, end - begin + 1));
-  }
-  if (d.filenames.empty()) Fail(dir / "filenames.txt", "lists no images");
+  const fs::path list = dir / "filenames.txt";
+  d.filenames = ParseFilenames(ReadTextFile(list.string()), list.string());
   const std::size_t k = d.filenames.size();
-
-  d.light_directions = ReadTriples(dir / "light_directions.txt", k);
-  for (std::size_t i = 0; i < k; ++i) {
-    const double norm = d.light_directions[i].norm();
-    if (!(norm > 1e-9)) {
-      Fail(dir / "light_directions.txt", "zero light direction", static_cast<int>(i + 1));
-    }
-    if (std::abs(norm - 1) > 1e-3) {
-      d.warnings.push_back("light_directions.txt: direction " + std::to_string(i + 1) +
-                           " has length " + std::to_string(norm) + "; normalized");
-    }
-    d.light_directions[i] /= norm;
-  }
-  if (fs::exists(dir / "light_intensities.txt")) {
-    d.light_intensities = ReadTriples(dir / "light_intensities.txt", k);
-    for (std::size_t i = 0; i < k; ++i) {
-      if (!(d.light_intensities[i].array() > 0).all()) {
-        Fail(dir / "light_intensities.txt", "light intensities must be > 0",
-             static_cast<int>(i + 1));
-      }
-    }
+  const fs::path directions = dir / "light_directions.txt";
+  d.light_directions =
+      ParseLightDirections(ReadTextFile(directions.string()), directions.string(), k, &d.warnings);
+  const fs::path intensities = dir / "light_intensities.txt";
+  if (fs::exists(intensities, error)) {
+    d.light_intensities =
+        ParseLightIntensities(ReadTextFile(intensities.string()), intensities.string(), k);
   } else {
     d.light_intensities.assign(k, Vec3d::Ones());
   }
-  if (fs::exists(dir / "material.json")) d.material = ParseMaterialJson(dir / "material.json");
-
-  if (options.load_images) {
-    d.images.resize(k);
-    std::vector<std::string> errors(k);
-    ParallelFor(0, k, 1, options.threads, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) {
-        try {
-          d.images[i] = ToRgb(ReadImage((dir / d.filenames[i]).string()));
-        } catch (const std::exception& ex) {
-          errors[i] = ex.what();
-        }
-      }
-    });
-    for (const std::string& error : errors)
-      if (!error.empty()) throw std::runtime_error(error);
-    if (DatasetIsSrgb(dir)) {
-      for (ImageF& image : d.images)
-        for (float& v : image.pixels) v = SrgbToLinear(v);
-    }
-    for (std::size_t i = 1; i < k; ++i) {
-      if (d.images[i].width != d.images[0].width || d.images[i].height != d.images[0].height) {
-        Fail(dir / d.filenames[i], "is " + std::to_string(d.images[i].width) + "x" +
-                                       std::to_string(d.images[i].height) + ", but " +
-                                       d.filenames[0] + " is " + std::to_string(d.images[0].width) +
-                                       "x" + std::to_string(d.images[0].height));
-      }
-    }
+  const fs::path material = dir / "material.json";
+  if (fs::exists(material, error)) {
+    d.material = ParseMaterialJson(ReadTextFile(material.string()), material.string());
   }
-  const int width = d.images.empty() ? 0 : d.images[0].width;
-  const int height = d.images.empty() ? 0 : d.images[0].height;
 
-  if (fs::exists(dir / "mask.png")) {
-    const ImageF m = ReadImage((dir / "mask.png").string());
-    if (!d.images.empty() && (m.width != width || m.height != height)) {
-      Fail(dir / "mask.png", "is " + std::to_string(m.width) + "x" + std::to_string(m.height) +
-                                 ", the images are " + std::to_string(width) + "x" +
-                                 std::to_string(height));
-    }
-    d.mask = Mask(m.width, m.height, false);
-    for (std::size_t p = 0; p < m.pixel_count(); ++p) {
-      for (int c = 0; c < std::min(m.channels, 3); ++c) {
-        if (m.pixels[p * m.channels + c] > 0) d.mask.inside[p] = 1;
-      }
+  // The images' size from the first one's header, so the mask and the ground truth are checked
+  // against it before anything large is read.
+  const fs::path first = dir / d.filenames[0];
+  int width = 0, height = 0;
+  if (options.load_images || fs::exists(first, error)) {
+    const ImageHeader header = ReadImageHeader(first.string());
+    width = header.width;
+    height = header.height;
+  }
+
+  const fs::path mask_path = dir / "mask.png";
+  if (fs::exists(mask_path, error)) {
+    d.mask = ReadMask(mask_path.string(), options.memory);
+    if (width > 0 && (d.mask.width != width || d.mask.height != height)) {
+      Fail(mask_path, "is " + Size(d.mask.width, d.mask.height) + ", the images are " +
+                          Size(width, height) + " (" + d.filenames[0] + ")");
     }
   } else {
     d.mask = Mask(width, height, true);
   }
 
-  if (options.load_ground_truth) {
-    if (fs::exists(dir / "Normal_gt.mat")) {
-      d.normal_gt = ReadNormalMat((dir / "Normal_gt.mat").string(), "Normal_gt");
-    } else if (fs::exists(dir / "normal.txt") && d.mask.width > 0) {
-      d.normal_gt = ReadNormalText(dir / "normal.txt", d.mask.width, d.mask.height);
+  if (options.load_images) {
+    RequireMemory(options.memory, static_cast<double>(k) * width * height * 3 * sizeof(float),
+                  directory + ": " + std::to_string(k) + " images of " + Size(width, height));
+    d.images.resize(k);
+    std::vector<std::string> errors(k);
+    ParallelFor(0, k, 1, options.threads, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) {
+        const std::string path = (dir / d.filenames[i]).string();
+        try {
+          const ImageHeader h = ReadImageHeader(path);
+          if (h.width != width || h.height != height) {
+            errors[i] = path + ": is " + Size(h.width, h.height) + ", but " + d.filenames[0] +
+                        " is " + Size(width, height);
+            continue;
+          }
+          d.images[i] = ToRgb(ReadImage(path, options.memory));
+        } catch (const std::exception& ex) {
+          errors[i] = ex.what();
+        }
+      }
+    });
+    for (const std::string& message : errors)
+      if (!message.empty()) throw std::runtime_error(message);
+    if (DatasetIsSrgb(dir)) {
+      for (ImageF& image : d.images)
+        for (float& v : image.pixels) v = SrgbToLinear(v);
     }
-    if (!d.normal_gt.pixels.empty() &&
-        (d.normal_gt.width != d.mask.width || d.normal_gt.height != d.mask.height)) {
-      Fail(dir / "Normal_gt.mat", "ground truth size differs from the images");
+  }
+
+  if (options.load_ground_truth) {
+    fs::path truth;
+    if (fs::exists(dir / "Normal_gt.mat", error)) {
+      truth = dir / "Normal_gt.mat";
+      d.normal_gt = ReadNormalMat(truth.string(), "Normal_gt");
+    } else if (fs::exists(dir / "normal.txt", error) && d.mask.width > 0) {
+      truth = dir / "normal.txt";
+      d.normal_gt = ParseNormalText(ReadTextFile(truth.string(), std::uint64_t{8} << 30),
+                                    truth.string(), d.mask.width, d.mask.height);
+    }
+    if (!d.normal_gt.pixels.empty()) {
+      if (d.mask.width > 0 &&
+          (d.normal_gt.width != d.mask.width || d.normal_gt.height != d.mask.height)) {
+        Fail(truth, "is " + Size(d.normal_gt.width, d.normal_gt.height) + ", the images are " +
+                        Size(d.mask.width, d.mask.height));
+      }
+      CheckNormalMap(d.normal_gt, truth.string());
     }
   }
   return d;
 }
 
-void WriteRenderOutput(const std::string& directory, const render::Scene& scene,
+std::string CheckDatasetLights(const render::Scene& scene) {
+  for (std::size_t j = 0; j < scene.lighting.lights.size(); ++j) {
+    if (scene.lighting.lights[j].type != reflectance::LightType::kDirectional) {
+      return "light " + std::to_string(j + 1) +
+             " is a point light; per-light datasets (DiLiGenT layout) need directional lights";
+    }
+  }
+  return "";
+}
+
+void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const render::Scene& scene,
                        const render::RenderOptions& options, const render::RenderOutput& output,
                        const OutputSettings& settings, bool per_light) {
   if (per_light) {
-    for (std::size_t j = 0; j < scene.lighting.lights.size(); ++j) {
-      if (scene.lighting.lights[j].type != reflectance::LightType::kDirectional) {
-        throw std::runtime_error("light " + std::to_string(j) +
-                                 " is a point light; per-light datasets (DiLiGenT layout) need "
-                                 "directional lights");
-      }
-    }
+    if (std::string m = CheckDatasetLights(scene); !m.empty()) throw std::invalid_argument(m);
   }
-  StagingDirectory staging(directory);
+  auto file = [&](const std::string& name) { return out.file(prefix + name); };
   {
     const std::string ext = settings.extension();
     const WriteOptions image_options = settings.write_options();
@@ -328,25 +360,25 @@ void WriteRenderOutput(const std::string& directory, const render::Scene& scene,
       for (std::size_t j = 0; j < output.per_light.size(); ++j) {
         std::string number = std::to_string(j + 1);
         number.insert(0, digits - number.size(), '0');
-        WriteImage(staging.file(number + ext), output.per_light[j], image_options);
+        WriteImage(file(number + ext), output.per_light[j], image_options);
         names += number + ext + "\n";
         directions.push_back(scene.lighting.lights[j].direction_cam);
         intensities.push_back(scene.lighting.lights[j].diffuse_intensity);
       }
-      WriteTextFile(staging.file("filenames.txt"), names);
-      WriteTextFile(staging.file("light_directions.txt"), Triples(directions));
-      WriteTextFile(staging.file("light_intensities.txt"), Triples(intensities));
+      WriteTextFile(file("filenames.txt"), names);
+      WriteTextFile(file("light_directions.txt"), Triples(directions));
+      WriteTextFile(file("light_intensities.txt"), Triples(intensities));
     } else {
-      WriteImage(staging.file("image" + ext), output.image, image_options);
+      WriteImage(file("image" + ext), output.image, image_options);
     }
-    WriteImage(staging.file("mask.png"), MaskImage(output.mask), {8, Encoding::kLinear});
-    WriteImage(staging.file("normals.exr"), output.normal_cam);
-    WriteImage(staging.file("normals.png"), NormalMapPicture(output.normal_cam, output.mask),
+    WriteImage(file("mask.png"), MaskImage(output.mask), {8, Encoding::kLinear});
+    WriteImage(file("normals.exr"), output.normal_cam);
+    WriteImage(file("normals.png"), NormalMapPicture(output.normal_cam, output.mask),
                {16, Encoding::kLinear});
-    WriteImage(staging.file("depth.exr"), output.depth);
-    WriteImage(staging.file("albedo.exr"), output.albedo);
-    WriteNormalMat(staging.file("Normal_gt.mat"), "Normal_gt", output.normal_cam);
-    WriteTextFile(staging.file("material.json"), MaterialJson(scene, options).dump(2) + "\n");
+    WriteImage(file("depth.exr"), output.depth);
+    WriteImage(file("albedo.exr"), output.albedo);
+    WriteNormalMat(file("Normal_gt.mat"), "Normal_gt", output.normal_cam);
+    WriteTextFile(file("material.json"), MaterialJson(scene, options).dump(2) + "\n");
     nlohmann::json meta;
     meta["generator"] = "iphong render";
     meta["images"] = per_light ? output.per_light.size() : 1;
@@ -365,9 +397,8 @@ void WriteRenderOutput(const std::string& directory, const render::Scene& scene,
                      {"shot_photons", options.noise.shot_photons},
                      {"quantization_bits", options.noise.quantization_bits},
                      {"seed", options.noise.seed}};
-    WriteTextFile(staging.file("render.json"), meta.dump(2) + "\n");
+    WriteTextFile(file("render.json"), meta.dump(2) + "\n");
   }
-  staging.Commit();
 }
 
 }  // namespace iphong::io
@@ -382,11 +413,16 @@ ObservationSet LoadObservations(const std::string& directory, const DatasetLoadO
   Dataset& d = set.dataset;
   d = LoadDataset(directory, meta_options);
   const std::size_t k = d.filenames.size();
-  if (d.mask.width == 0) {  // no mask.png: the whole image, sized by the first image
-    const ImageF first = ReadImage((dir / d.filenames[0]).string());
-    d.mask = Mask(first.width, first.height, true);
+  if (d.mask.width == 0) {  // the first image was not there to size the whole-image mask
+    RequireRegularFile((dir / d.filenames[0]).string());
   }
   const int w = d.mask.width, h = d.mask.height;
+  // The observations, plus one decoded image (and the decoder's buffer) per thread.
+  const double threads = std::min<double>(ResolveThreads(options.threads), k);
+  RequireMemory(
+      options.memory,
+      (static_cast<double>(k) * d.mask.count() * 3 + threads * 2.0 * w * h * 4) * sizeof(float),
+      directory + ": " + std::to_string(k) + " images of " + Size(w, h));
   solve::PhotometricData& data = set.observations;
   data = solve::ObservationLayout(w, h, d.mask, d.light_directions, d.light_intensities);
   const bool srgb = DatasetIsSrgb(dir);
@@ -395,13 +431,14 @@ ObservationSet LoadObservations(const std::string& directory, const DatasetLoadO
     for (std::size_t j = b; j < e; ++j) {
       const std::string path = (dir / d.filenames[j]).string();
       try {
-        ImageF image = ToRgb(ReadImage(path));
-        if (image.width != w || image.height != h) {
-          errors[j] = path + ": is " + std::to_string(image.width) + "x" +
-                      std::to_string(image.height) + ", but the mask is " + std::to_string(w) +
-                      "x" + std::to_string(h);
+        const ImageHeader header = ReadImageHeader(path);
+        if (header.width != w || header.height != h) {
+          errors[j] = path + ": is " + Size(header.width, header.height) + ", but " +
+                      (fs::exists(dir / "mask.png") ? "mask.png" : d.filenames[0]) + " is " +
+                      Size(w, h);
           continue;
         }
+        ImageF image = ToRgb(ReadImage(path, options.memory));
         if (srgb)
           for (float& v : image.pixels) v = SrgbToLinear(v);
         if (auto m = solve::GatherImage(data, static_cast<int>(j), image.pixels.data());
@@ -413,6 +450,7 @@ ObservationSet LoadObservations(const std::string& directory, const DatasetLoadO
       }
     }
   });
+  // The first failure in light order, whichever thread met it first.
   for (const std::string& error : errors)
     if (!error.empty()) throw std::runtime_error(error);
   if (auto m = data.Validate(); !m.empty()) throw std::runtime_error(directory + ": " + m);

@@ -12,20 +12,15 @@
 #include <string>
 #include <vector>
 
+#include "core/resources.h"
+#include "io/dataset_text.h"
+#include "io/output_folder.h"
 #include "io/scene_file.h"
 #include "reflectance/material.h"
 #include "render/renderer.h"
 #include "solve/photometric_data.h"
 
 namespace iphong::io {
-
-// Coefficients from material.json. kd is optional: absent means an unknown per-pixel albedo.
-struct DatasetMaterial {
-  reflectance::Lobe model = reflectance::Lobe::kPhong;
-  Vec3d ambient = Vec3d::Zero();
-  reflectance::Material material;
-  bool kd_known = false;
-};
 
 struct Dataset {
   std::string directory;
@@ -46,11 +41,14 @@ struct DatasetLoadOptions {
   bool load_images = true;
   bool load_ground_truth = true;
   int threads = 0;
+  MemoryLimit memory;  // checked before the images are decoded
 };
 
 // Reads a dataset directory. Throws std::runtime_error whose one-line message names the file
 // (and the line for text files): missing or short light files, NaN, zero intensities, image
-// count or size mismatches, unreadable images, bad JSON.
+// count or size mismatches (the mask and the ground truth are checked against the first image's
+// header before anything large is read), unreadable images, bad JSON, ground truth that is not a
+// map of unit normals; ResourceError when the images would not fit in `options.memory`.
 Dataset LoadDataset(const std::string& directory, const DatasetLoadOptions& options = {});
 
 // The dataset without its images, plus the masked pixels of every image gathered as the images
@@ -63,14 +61,20 @@ struct ObservationSet {
 ObservationSet LoadObservations(const std::string& directory,
                                 const DatasetLoadOptions& options = {});
 
-// Writes what `iphong render` produces into `directory`, atomically (the folder appears complete
-// or not at all; an existing one is replaced). With per_light, a DiLiGenT dataset (one image per
-// light); otherwise image.<ext> with all lights. Ground truth either way.
-void WriteRenderOutput(const std::string& directory, const render::Scene& scene,
+// "" when every light can go into a per-light dataset (the DiLiGenT layout has directions only),
+// else which light cannot.
+std::string CheckDatasetLights(const render::Scene& scene);
+
+// Writes what `iphong render` produces into `out` under `prefix` ("" or "sub/"): with per_light,
+// a DiLiGenT dataset (one image per light); otherwise image.<ext> with all lights. Ground truth
+// either way. Nothing is visible until the caller commits `out`.
+void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const render::Scene& scene,
                        const render::RenderOptions& options, const render::RenderOutput& output,
                        const OutputSettings& settings, bool per_light);
 
-// MATLAB files: an H×W×3 double array, as DiLiGenT's Normal_gt.
+// MATLAB files: an H×W×3 double array, as DiLiGenT's Normal_gt. The write is verified by reading
+// the file back (OutputError); the read checks the file's structure first, since matio reads a
+// truncated compressed array as zeros without a word.
 void WriteNormalMat(const std::string& path, const std::string& variable, const ImageF& normals);
 ImageF ReadNormalMat(const std::string& path, const std::string& variable);
 

@@ -1,14 +1,15 @@
 #include "io/image_io.h"
 
-#include "io/staging.h"
-
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <stdexcept>
-#include <system_error>
+
+#include "core/errors.h"
+#include "io/files.h"
 
 namespace iphong::io {
 namespace fs = std::filesystem;
@@ -23,7 +24,44 @@ bool IsFloatFormat(const fs::path& path) {
 }
 
 [[noreturn]] void Fail(const std::string& path, const std::string& what) {
-  throw std::runtime_error(path + ": " + what);
+  throw std::runtime_error(path + ": " + OneLine(what));
+}
+
+// Deflate, the best general-purpose coder in these formats, stops near 1032:1; a file that
+// claims far more raw data per stored byte than that cannot hold its pixels.
+constexpr double kMaxCompression = 4096;
+// Below this declared size the check is pointless: decoding a small lie costs nothing.
+constexpr double kPlausibilityFloor = 64e6;
+constexpr double kMaxPixels = 2147483647.0;
+
+std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHeader* header) {
+  const std::uint64_t file_bytes = RequireRegularFile(path);
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) {
+    std::string why = OIIO::geterror();
+    Fail(path, why.empty() ? "cannot open as an image" : why);
+  }
+  const OIIO::ImageSpec& spec = in->spec();
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1) {
+    Fail(path, "empty or not a 2D image");
+  }
+  const double pixels = static_cast<double>(spec.width) * spec.height;
+  if (pixels > kMaxPixels || spec.nchannels > 64) {
+    Fail(path, "declares " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + "x" +
+                   std::to_string(spec.nchannels) +
+                   ", more than iphong handles (2^31 pixels, 64 "
+                   "channels)");
+  }
+  const int bits =
+      spec.get_int_attribute("oiio:BitsPerSample", static_cast<int>(spec.format.size()) * 8);
+  const double declared = pixels * spec.nchannels * std::max(bits, 1) / 8.0;
+  if (declared > kPlausibilityFloor && declared > kMaxCompression * file_bytes) {
+    Fail(path, "declares " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                   " pixels but has only " + std::to_string(file_bytes) +
+                   " bytes: truncated or corrupt");
+  }
+  *header = {spec.width, spec.height, spec.nchannels};
+  return in;
 }
 
 }  // namespace
@@ -41,12 +79,12 @@ float SrgbToLinear(float encoded) {
 void WriteImage(const std::string& path, const ImageF& image, const WriteOptions& options) {
   if (image.width <= 0 || image.height <= 0 || image.channels <= 0 ||
       image.pixels.size() != image.pixel_count() * image.channels) {
-    Fail(path, "refusing to write an empty or inconsistent image");
+    throw std::logic_error(path + ": refusing to write an empty or inconsistent image");
   }
   const fs::path target(path);
   const bool is_float = IsFloatFormat(target);
   if (!is_float && options.bits != 8 && options.bits != 16) {
-    Fail(path, "integer images are 8 or 16 bits per channel, got " + std::to_string(options.bits));
+    throw std::logic_error(path + ": integer images are 8 or 16 bits per channel");
   }
 
   std::vector<float> pixels = image.pixels;
@@ -65,32 +103,51 @@ void WriteImage(const std::string& path, const ImageF& image, const WriteOptions
                  is_float || options.encoding == Encoding::kLinear ? "Linear" : "sRGB");
   spec.attribute("Software", "iphong");
 
-  WriteFileAtomically(path, [&](const std::string& temp) -> std::string {
-    auto out = OIIO::ImageOutput::create(temp);
-    if (!out) return "no image writer for this format: " + OIIO::geterror();
-    if (!out->open(temp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) ||
-        !out->close()) {
-      return "cannot write: " + out->geterror();
-    }
-    return "";
-  });
+  // Encoded in memory, so the bytes reach the disk through one verified write: OpenImageIO's
+  // writers can report success on a full disk.
+  std::vector<unsigned char> bytes;
+  OIIO::Filesystem::IOVecOutput memory(bytes);
+  auto out = OIIO::ImageOutput::create(path);
+  if (!out) throw OutputError(path + ": no image writer for this format");
+  if (!out->set_ioproxy(&memory) || !out->open(path, spec) ||
+      !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close() || bytes.empty()) {
+    throw OutputError(path + ": cannot encode: " + OneLine(out->geterror()));
+  }
+  out.reset();
+  WriteFileVerified(path,
+                    std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
-ImageF ReadImage(const std::string& path) {
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) {
-    std::string why = OIIO::geterror();
-    if (why.empty()) why = "cannot open";
-    Fail(path, why);
-  }
-  const OIIO::ImageSpec& spec = in->spec();
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) Fail(path, "empty image");
-  ImageF image(spec.width, spec.height, spec.nchannels);
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+ImageHeader ReadImageHeader(const std::string& path) {
+  ImageHeader header;
+  OpenChecked(path, &header);
+  return header;
+}
+
+ImageF ReadImage(const std::string& path, const MemoryLimit& memory) {
+  ImageHeader h;
+  auto in = OpenChecked(path, &h);
+  // The float image, and the decoder's own buffer of at most the same size.
+  RequireMemory(memory, 2.0 * h.width * h.height * h.channels * sizeof(float),
+                path + ": decoding this " + std::to_string(h.width) + "x" +
+                    std::to_string(h.height) + " image");
+  ImageF image(h.width, h.height, h.channels);
+  if (!in->read_image(0, 0, 0, h.channels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
     Fail(path, "cannot decode: " + in->geterror());
   }
   in->close();
   return image;
+}
+
+Mask ReadMask(const std::string& path, const MemoryLimit& memory) {
+  const ImageF m = ReadImage(path, memory);
+  Mask mask(m.width, m.height, false);
+  for (std::size_t p = 0; p < m.pixel_count(); ++p) {
+    for (int c = 0; c < std::min(m.channels, 3); ++c) {
+      if (m.pixels[p * m.channels + c] > 0) mask.inside[p] = 1;
+    }
+  }
+  return mask;
 }
 
 }  // namespace iphong::io

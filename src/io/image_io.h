@@ -6,6 +6,7 @@
 
 #include <string>
 
+#include "core/resources.h"
 #include "core/types.h"
 
 namespace iphong::io {
@@ -21,13 +22,29 @@ struct WriteOptions {
   Encoding encoding = Encoding::kSrgb;
 };
 
-// Writes atomically: a temporary file beside `path` is renamed over it only once complete, so a
-// failure never leaves a half-written image. Throws std::runtime_error naming the file.
+// Encodes the image in memory (the format from the extension), then writes it as a new file with
+// io/files.h's verified write. Outputs go through an OutputFolder, which picks `path`. Throws
+// OutputError naming the file.
 void WriteImage(const std::string& path, const ImageF& image, const WriteOptions& options = {});
 
+struct ImageHeader {
+  int width = 0, height = 0, channels = 0;
+};
+
+// The size a file declares, read from its header only. Refuses what is not a regular file, a
+// header no reader accepts, and sizes iphong cannot hold: more than 2^31 pixels, or a declared size
+// the file is far too small to contain (a 200-byte PNG that says 100000×100000: no decoder
+// compresses that well; a truncated or forged file). Throws std::runtime_error naming the file.
+ImageHeader ReadImageHeader(const std::string& path);
+
 // Reads any format OpenImageIO knows into linear float, integer formats scaled to [0, 1]
-// (no transfer curve is undone). Throws std::runtime_error naming the file.
-ImageF ReadImage(const std::string& path);
+// (no transfer curve is undone). Checks the header first (ReadImageHeader) and the memory the
+// decoded image needs against `memory` before allocating it (ResourceError). Throws
+// std::runtime_error naming the file.
+ImageF ReadImage(const std::string& path, const MemoryLimit& memory = {});
+
+// A mask picture: a pixel is inside where any of its first three channels is non-zero.
+Mask ReadMask(const std::string& path, const MemoryLimit& memory = {});
 
 // The sRGB transfer curve and its inverse, on [0, 1].
 float LinearToSrgb(float linear);

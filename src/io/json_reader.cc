@@ -1,23 +1,29 @@
 #include "io/json_reader.h"
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "core/errors.h"
 
 namespace iphong::io {
 
 nlohmann::json JsonReader::Parse(const std::string& text, const std::string& file) {
   try {
     return nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    // nlohmann's message: "[json.exception.parse_error.101] parse error at line 3, column 5: ..."
+  } catch (const nlohmann::json::exception& e) {
+    // nlohmann's messages: "[json.exception.parse_error.101] parse error at line 3, column 5:
+    // ...", "[json.exception.out_of_range.406] number overflow parsing '1e400'".
     std::string what = e.what();
-    const auto start = what.find("parse error");
-    throw std::runtime_error(file + ": " +
-                             (start == std::string::npos ? what : what.substr(start)));
+    const auto start = what.find("] ");
+    what = start == std::string::npos ? what : what.substr(start + 2);
+    if (what.rfind("number overflow", 0) == 0) what = "parse error: " + what;
+    throw std::runtime_error(OneLine(file + ": " + what));
   }
 }
 
 void JsonReader::Fail(const std::string& message) const {
-  throw JsonError(where() + ": " + message);
+  throw JsonError(OneLine(where() + ": " + message));
 }
 
 bool JsonReader::Has(const std::string& key) const {
@@ -53,9 +59,27 @@ double JsonReader::Number(const std::string& key, double fallback) const {
 
 int JsonReader::Integer(const std::string& key, int fallback) const {
   if (!Has(key)) return fallback;
-  const JsonReader f = Field(key);
-  if (!f.value_.is_number_integer()) f.Fail("expected an integer");
-  return f.value_.get<int>();
+  return Field(key).Integer();
+}
+
+int JsonReader::Integer() const {
+  // Read wide and range-checked: get<int>() of 4294967328 would wrap to 32. Whole floats (256.0,
+  // as some writers print) are integers too.
+  double v = 0;
+  if (value_.is_number_unsigned()) {
+    v = static_cast<double>(value_.get<std::uint64_t>());
+  } else if (value_.is_number_integer()) {
+    v = static_cast<double>(value_.get<std::int64_t>());
+  } else if (value_.is_number_float() && std::isfinite(value_.get<double>()) &&
+             value_.get<double>() == std::floor(value_.get<double>())) {
+    v = value_.get<double>();
+  } else {
+    Fail("expected an integer");
+  }
+  if (v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max()) {
+    Fail("integer out of range");
+  }
+  return static_cast<int>(v);
 }
 
 bool JsonReader::Bool(const std::string& key, bool fallback) const {

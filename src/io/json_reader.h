@@ -32,6 +32,7 @@ class JsonReader {
 
   double Number() const;
   double Number(const std::string& key, double fallback) const;
+  int Integer() const;  // an int; larger values are an error, never wrapped
   int Integer(const std::string& key, int fallback) const;
   bool Bool(const std::string& key, bool fallback) const;
   std::string String() const;

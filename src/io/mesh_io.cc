@@ -1,8 +1,7 @@
 #include "io/mesh_io.h"
 
+#include "io/files.h"
 #include "io/image_io.h"
-
-#include "io/staging.h"
 
 // OpenMesh's IO header must come before the mesh kernel.
 #include <OpenMesh/Core/IO/MeshIO.hh>
@@ -10,7 +9,10 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <sstream>
 #include <stdexcept>
+
+#include "core/errors.h"
 
 namespace iphong::io {
 namespace fs = std::filesystem;
@@ -28,7 +30,7 @@ void QuietOpenMeshInfoLog() { omlog().disable(); }
 }  // namespace
 
 geometry::TriangleMesh LoadMesh(const std::string& path, const MeshLoadOptions& options) {
-  if (!fs::exists(path)) throw std::runtime_error(path + ": no such file");
+  RequireRegularFile(path);
   QuietOpenMeshInfoLog();
   OmMesh om;
   om.request_vertex_normals();
@@ -118,10 +120,14 @@ void SaveMesh(const std::string& path, const geometry::TriangleMesh& mesh,
   }
   OpenMesh::IO::Options io_options = OpenMesh::IO::Options::VertexNormal;
   if (vertex_colors) io_options += OpenMesh::IO::Options::VertexColor;
-  if (fs::path(path).extension() == ".ply") io_options += OpenMesh::IO::Options::Binary;
-  WriteFileAtomically(path, [&](const std::string& temp) -> std::string {
-    return OpenMesh::IO::write_mesh(om, temp, io_options) ? "" : "cannot write the mesh";
-  });
+  const std::string ext = fs::path(path).extension().string();
+  if (ext == ".ply") io_options += OpenMesh::IO::Options::Binary;
+  // Into memory first: OpenMesh reports success on a full disk; the verified write does not.
+  std::ostringstream bytes(std::ios::binary);
+  if (!OpenMesh::IO::write_mesh(om, bytes, ext, io_options) || bytes.str().empty()) {
+    throw OutputError(path + ": cannot encode the mesh");
+  }
+  WriteFileVerified(path, bytes.str());
 }
 
 }  // namespace iphong::io

@@ -5,10 +5,11 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/errors.h"
 #include "geometry/primitives.h"
+#include "io/files.h"
 #include "io/json_reader.h"
 #include "io/mesh_io.h"
-#include "io/text_file.h"
 
 namespace iphong::io {
 namespace fs = std::filesystem;
@@ -19,11 +20,35 @@ using reflectance::Light;
 using reflectance::Material;
 
 constexpr double kDeg = M_PI / 180.0;
-
 std::string Resolve(const std::string& base_dir, const std::string& path) {
   const fs::path p(path);
   return p.is_absolute() || base_dir.empty() ? path : (fs::path(base_dir) / p).string();
 }
+
+// Bytes a triangle costs from its construction to the rasterizer's screen coordinates and band
+// lists (positions, corner normals, uvs, projected vertices), rounded up.
+constexpr double kBytesPerTriangle = 200;
+
+// What parsing one scene carries along: where relative paths start, and the memory the meshes
+// made so far take, checked against the limit before each is built.
+struct ParseContext {
+  std::string base_dir;
+  MemoryLimit memory;
+  double mesh_bytes = 0;
+  std::vector<std::string> inputs;  // files read, resolved
+
+  std::string Input(const std::string& path) {
+    inputs.push_back(Resolve(base_dir, path));
+    return inputs.back();
+  }
+
+  void Reserve(const JsonReader& j, double triangles) {
+    mesh_bytes += triangles * kBytesPerTriangle;
+    RequireMemory(memory, mesh_bytes,
+                  j.where() + ": a mesh of " + std::to_string(static_cast<long long>(triangles)) +
+                      " triangles (with the scene's other meshes)");
+  }
+};
 
 double Positive(const JsonReader& j, const std::string& key, double fallback) {
   const double v = j.Number(key, fallback);
@@ -124,7 +149,7 @@ Eigen::Affine3d ParseTransform(const JsonReader& object) {
   return t;
 }
 
-render::SceneObject ParseObject(const JsonReader& j, const std::string& base_dir) {
+render::SceneObject ParseObject(const JsonReader& j, ParseContext& context) {
   render::SceneObject object;
   const std::string shape = j.Field("shape").String();
   object.name = j.String("name", shape);
@@ -136,23 +161,30 @@ render::SceneObject ParseObject(const JsonReader& j, const std::string& base_dir
   try {
     if (shape == "sphere") {
       allow({"radius", "subdivisions"});
-      object.mesh =
-          geometry::MakeSphere(Positive(j, "radius", 1.0), IntegerIn(j, "subdivisions", 5, 0, 9));
+      const double radius = Positive(j, "radius", 1.0);
+      const int subdivisions = IntegerIn(j, "subdivisions", 5, 0, 9);
+      context.Reserve(j, 20 * std::pow(4.0, subdivisions));
+      object.mesh = geometry::MakeSphere(radius, subdivisions);
     } else if (shape == "cylinder") {
       allow({"radius", "height", "segments", "capped"});
-      object.mesh =
-          geometry::MakeCylinder(Positive(j, "radius", 0.5), Positive(j, "height", 1.0),
-                                 IntegerIn(j, "segments", 128, 3, 1 << 20), j.Bool("capped", true));
+      const double radius = Positive(j, "radius", 0.5), height = Positive(j, "height", 1.0);
+      const int segments = IntegerIn(j, "segments", 128, 3, 1 << 20);
+      const bool capped = j.Bool("capped", true);
+      context.Reserve(j, (capped ? 4.0 : 2.0) * segments);
+      object.mesh = geometry::MakeCylinder(radius, height, segments, capped);
     } else if (shape == "torus") {
       allow({"ring_radius", "tube_radius", "ring_segments", "tube_segments"});
-      object.mesh =
-          geometry::MakeTorus(Positive(j, "ring_radius", 0.6), Positive(j, "tube_radius", 0.25),
-                              IntegerIn(j, "ring_segments", 128, 3, 1 << 16),
-                              IntegerIn(j, "tube_segments", 64, 3, 1 << 16));
+      const double ring = Positive(j, "ring_radius", 0.6), tube = Positive(j, "tube_radius", 0.25);
+      const int ring_segments = IntegerIn(j, "ring_segments", 128, 3, 1 << 16);
+      const int tube_segments = IntegerIn(j, "tube_segments", 64, 3, 1 << 16);
+      context.Reserve(j, 2.0 * ring_segments * tube_segments);
+      object.mesh = geometry::MakeTorus(ring, tube, ring_segments, tube_segments);
     } else if (shape == "plane") {
       allow({"size", "divisions"});
-      object.mesh =
-          geometry::MakePlane(Positive(j, "size", 2.0), IntegerIn(j, "divisions", 1, 1, 8192));
+      const double size = Positive(j, "size", 2.0);
+      const int divisions = IntegerIn(j, "divisions", 1, 1, 8192);
+      context.Reserve(j, 2.0 * divisions * divisions);
+      object.mesh = geometry::MakePlane(size, divisions);
     } else if (shape == "box") {
       allow({"size"});
       object.mesh = geometry::MakeBox(j.Vector3("size", Vec3d::Ones()));
@@ -167,7 +199,10 @@ render::SceneObject ParseObject(const JsonReader& j, const std::string& base_dir
         sy = s.At(1).Number();
       }
       if (j.Has("image")) {
-        ImageF heights = ReadImage(Resolve(base_dir, j.Field("image").String()));
+        const std::string path = context.Input(j.Field("image").String());
+        const ImageHeader header = ReadImageHeader(path);
+        context.Reserve(j, 2.0 * header.width * header.height);
+        ImageF heights = ReadImage(path, context.memory);
         const double scale = j.Number("scale", 0.1);
         for (float& v : heights.pixels) v = static_cast<float>(v * scale);
         if (heights.channels > 1) {  // keep the first channel
@@ -189,9 +224,13 @@ render::SceneObject ParseObject(const JsonReader& j, const std::string& base_dir
         if (j.Has("resolution")) {
           const JsonReader r = j.Field("resolution");
           if (r.Size() != 2) r.Fail("expected [columns, rows]");
-          cols = static_cast<int>(r.At(0).Number());
-          rows = static_cast<int>(r.At(1).Number());
+          cols = r.At(0).Integer();
+          rows = r.At(1).Integer();
+          if (cols < 2 || rows < 2 || cols > 1 << 16 || rows > 1 << 16) {
+            r.Fail("expected two integers in 2..65536");
+          }
         }
+        context.Reserve(j, 2.0 * cols * rows);
         object.mesh = geometry::MakeHeightField(f, sx, sy, cols, rows);
       }
     } else if (shape == "mesh") {
@@ -199,25 +238,37 @@ render::SceneObject ParseObject(const JsonReader& j, const std::string& base_dir
       MeshLoadOptions load;
       load.crease_angle_deg = j.Number("crease_angle_deg", load.crease_angle_deg);
       load.use_file_normals = j.Bool("use_file_normals", load.use_file_normals);
-      object.mesh = LoadMesh(Resolve(base_dir, j.Field("path").String()), load);
+      const std::string path = context.Input(j.Field("path").String());
+      // A mesh file holds at least ~12 bytes per triangle (binary STL's 50, PLY's 13).
+      context.Reserve(j, static_cast<double>(RequireRegularFile(path)) / 12);
+      object.mesh = LoadMesh(path, load);
     } else {
       j.Field("shape").Fail("unknown shape '" + shape +
                             "' (expected sphere, cylinder, torus, plane, box, heightfield, mesh)");
     }
   } catch (const JsonError&) {
     throw;
+  } catch (const ResourceError&) {
+    throw;
   } catch (const std::exception& e) {  // bad parameters, unreadable mesh or height image
     j.Fail(e.what());
   }
   j.OnlyKeys(keys);
   geometry::TransformMesh(object.mesh, ParseTransform(j));
+  for (const Vec3d& p : object.mesh.positions) {
+    if (!p.allFinite() || !(p.cwiseAbs().maxCoeff() < 1e15)) {
+      j.Fail("coordinates beyond 1e15 scene units (size or transform too large)");
+    }
+  }
   object.material = j.Has("material") ? ParseMaterial(j.Field("material"))
                                       : reflectance::FindMaterialPreset("plastic").material;
   if (j.Has("albedo_texture")) {
     const JsonReader texture = j.Field("albedo_texture");
     try {
-      object.albedo_texture = ReadImage(Resolve(base_dir, texture.String()));
+      object.albedo_texture = ReadImage(context.Input(texture.String()), context.memory);
     } catch (const JsonError&) {
+      throw;
+    } catch (const ResourceError&) {
       throw;
     } catch (const std::exception& e) {
       texture.Fail(e.what());
@@ -240,7 +291,10 @@ Camera ParseCamera(const JsonReader& root) {
   if (type != "perspective") j.Field("type").Fail("expected orthographic or perspective");
   j.OnlyKeys({"type", "fov_deg", "distance", "fx", "fy", "cx", "cy"});
   const double distance = Positive(j, "distance", 4.0);
-  Camera camera = Camera::Perspective(width, height, j.Number("fov_deg", 40), distance);
+  const double fov_deg = j.Number("fov_deg", 40);
+  // A pinhole sees less than a half-space: at 180° the focal length is 0 and nothing is drawn.
+  if (!(fov_deg > 0 && fov_deg < 180)) j.Field("fov_deg").Fail("expected a number in (0, 180)");
+  Camera camera = Camera::Perspective(width, height, fov_deg, distance);
   if (j.Has("fx")) {
     camera.fx = Positive(j, "fx", 1);
     camera.fy = Positive(j, "fy", camera.fx);
@@ -263,7 +317,7 @@ Material ReadMaterialCoefficients(const JsonReader& j, Material m) {
 }
 
 SceneFile ParseScene(const std::string& json_text, const std::string& source,
-                     const std::string& base_dir) {
+                     const std::string& base_dir, const MemoryLimit& memory) {
   const nlohmann::json document = JsonReader::Parse(json_text, source);
   const JsonReader root(document, source);
   root.OnlyKeys({"width", "height", "camera", "ambient", "lights", "objects", "shading", "model",
@@ -280,9 +334,13 @@ SceneFile ParseScene(const std::string& json_text, const std::string& source,
   if (file.scene.lighting.lights.empty()) lights.Fail("the scene needs at least one light");
   const JsonReader objects = root.Field("objects");
   if (objects.Size() == 0) objects.Fail("the scene needs at least one object");
+  ParseContext context;
+  context.base_dir = base_dir;
+  context.memory = memory;
   for (std::size_t i = 0; i < objects.Size(); ++i) {
-    file.scene.objects.push_back(ParseObject(objects.At(i), base_dir));
+    file.scene.objects.push_back(ParseObject(objects.At(i), context));
   }
+  file.inputs = context.inputs;
 
   render::RenderOptions& o = file.options;
   try {
@@ -328,8 +386,8 @@ SceneFile ParseScene(const std::string& json_text, const std::string& source,
   return file;
 }
 
-SceneFile LoadSceneFile(const std::string& path) {
-  return ParseScene(ReadTextFile(path), path, fs::path(path).parent_path().string());
+SceneFile LoadSceneFile(const std::string& path, const MemoryLimit& memory) {
+  return ParseScene(ReadTextFile(path), path, fs::path(path).parent_path().string(), memory);
 }
 
 }  // namespace iphong::io

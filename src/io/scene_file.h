@@ -25,6 +25,9 @@
 #pragma once
 
 #include <string>
+#include <vector>
+
+#include "core/resources.h"
 
 #include "io/image_io.h"
 #include "render/renderer.h"
@@ -44,9 +47,14 @@ struct SceneFile {
   render::Scene scene;
   render::RenderOptions options;
   OutputSettings output;
+  // The files the scene reads (meshes, height images, textures), resolved: with the scene file,
+  // a render's inputs, which its output folder may not hold.
+  std::vector<std::string> inputs;
 };
 
-SceneFile LoadSceneFile(const std::string& path);
+// The meshes each shape makes, and the images it reads, are checked against `memory` before they
+// are built or decoded (ResourceError).
+SceneFile LoadSceneFile(const std::string& path, const MemoryLimit& memory = {});
 
 class JsonReader;
 // Overlays the coefficients present in `j` ("ka", "kd", "ks" as RGB or one number,
@@ -55,6 +63,6 @@ class JsonReader;
 reflectance::Material ReadMaterialCoefficients(const JsonReader& j, reflectance::Material start);
 // `source` names the document in errors; relative paths resolve against `base_dir`.
 SceneFile ParseScene(const std::string& json_text, const std::string& source,
-                     const std::string& base_dir);
+                     const std::string& base_dir, const MemoryLimit& memory = {});
 
 }  // namespace iphong::io

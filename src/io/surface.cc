@@ -4,9 +4,9 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "io/files.h"
 #include "io/image_io.h"
 #include "io/mesh_io.h"
-#include "io/text_file.h"
 #include "render/preview.h"
 #include "solve/metrics.h"
 
@@ -21,12 +21,13 @@ geometry::HeightMapFrame FrameOf(const integrate::IntegrateOptions& options) {
   return frame;
 }
 
-SurfaceFiles WriteSurfaceFiles(const StagingDirectory& out,
+SurfaceFiles WriteSurfaceFiles(OutputFolder& out, const std::string& prefix,
                                const integrate::IntegrateResult& result, const ImageF& normals,
                                const Mask& mask, const geometry::HeightMapFrame& frame,
                                const SurfaceFileOptions& options) {
   SurfaceFiles files;
-  WriteImage(out.file("height.exr"), result.height);
+  auto file = [&](const std::string& name) { return out.file(prefix + name); };
+  WriteImage(file("height.exr"), result.height);
   files.names.push_back("height.exr");
 
   geometry::HeightMeshOptions mesh_options;
@@ -45,10 +46,10 @@ SurfaceFiles WriteSurfaceFiles(const StagingDirectory& out,
       colors.emplace_back(scale * a[0], scale * a[1], scale * a[2]);
     }
   }
-  SaveMesh(out.file("mesh.ply"), mesh, options.albedo ? &colors : nullptr);
+  SaveMesh(file("mesh.ply"), mesh, options.albedo ? &colors : nullptr);
   files.names.push_back("mesh.ply");
   if (options.obj) {
-    SaveMesh(out.file("mesh.obj"), mesh);
+    SaveMesh(file("mesh.obj"), mesh);
     files.names.push_back("mesh.obj");
   }
   if (!mesh.triangles.empty()) {
@@ -56,7 +57,7 @@ SurfaceFiles WriteSurfaceFiles(const StagingDirectory& out,
     preview.width = options.preview_width;
     preview.texture = options.albedo;
     preview.threads = options.threads;
-    WriteImage(out.file("height.png"), render::RenderPreview(mesh, preview));
+    WriteImage(file("height.png"), render::RenderPreview(mesh, preview));
     files.names.push_back("height.png");
   }
 
@@ -96,7 +97,7 @@ SurfaceFiles WriteSurfaceFiles(const StagingDirectory& out,
       {"mesh_triangles", files.triangles},
       {"consistency_mean_deg", files.consistency_mean_deg},
       {"consistency_median_deg", files.consistency_median_deg}};
-  WriteTextFile(out.file("integrate.json"), report.dump(2) + "\n");
+  WriteTextFile(file("integrate.json"), report.dump(2) + "\n");
   files.names.push_back("integrate.json");
   return files;
 }

@@ -6,7 +6,7 @@
 
 #include "geometry/height_map.h"
 #include "integrate/integrate.h"
-#include "io/staging.h"
+#include "io/output_folder.h"
 
 namespace iphong::io {
 
@@ -24,12 +24,12 @@ struct SurfaceFiles {
   double consistency_mean_deg = 0, consistency_median_deg = 0;
 };
 
-// Writes into `out`: height.exr (float32, 1 channel, NaN outside the mask: height toward the
-// viewer, or depth for a perspective camera), mesh.ply (binary: the masked pixels triangulated,
-// per-vertex normals from `normals`, colours from the albedo when given; edges the integration
-// cut are not bridged), mesh.obj on request, height.png (the mesh rendered at an oblique view)
-// and integrate.json (method, solver, timings, residual, consistency).
-SurfaceFiles WriteSurfaceFiles(const StagingDirectory& out,
+// Writes into `out` under `prefix` ("" or "sub/"): height.exr (float32, 1 channel, NaN outside the
+// mask: height toward the viewer, or depth for a perspective camera), mesh.ply (binary: the masked
+// pixels triangulated, per-vertex normals from `normals`, colours from the albedo when given; edges
+// the integration cut are not bridged), mesh.obj on request, height.png (the mesh rendered at an
+// oblique view) and integrate.json (method, solver, timings, residual, consistency).
+SurfaceFiles WriteSurfaceFiles(OutputFolder& out, const std::string& prefix,
                                const integrate::IntegrateResult& result, const ImageF& normals,
                                const Mask& mask, const geometry::HeightMapFrame& frame,
                                const SurfaceFileOptions& options);

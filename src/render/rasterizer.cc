@@ -117,6 +117,11 @@ class BandRasterizer {
     const auto& tri = mesh.triangles[ref.triangle];
     std::array<Vertex, 3> v;
     for (int k = 0; k < 3; ++k) {
+      // A vertex at the camera's centre or beyond double range projects to inf/NaN: such a
+      // triangle has no pixels to give, and rounding its edges to int would be undefined.
+      if (!screen_[ref.item][tri[k]].allFinite()) return;
+    }
+    for (int k = 0; k < 3; ++k) {
       const Vec3d& s = screen_[ref.item][tri[k]];
       const double inv_w = camera_.type == geometry::CameraType::kPerspective ? 1.0 / s.z() : 1.0;
       v[k].x = s.x();
@@ -166,11 +171,18 @@ class BandRasterizer {
   // Seed 001, stage 2: constant attribute steps along the span, one pixel at a time.
   void FillSpan(int row, const TriangleRef& ref, const Edge& left, const Edge& right) {
     const double width = right.x - left.x;
-    if (!(width > 0)) return;
-    const int c0 = std::max(0, static_cast<int>(std::ceil(std::max(left.x - 0.5, -1.0))));
+    if (!(width > 0) || !std::isfinite(width)) return;  // also NaN and overflowed edges
+    // Clamped to the image in double before the cast, so far-off spans cannot overflow an int.
+    const int c0 = static_cast<int>(std::ceil(std::clamp(left.x - 0.5, -1.0, out_.width + 1.0)));
     const int c1 =
-        std::min(out_.width - 1, static_cast<int>(std::ceil(std::min(right.x - 0.5, 1e9))) - 1);
-    if (c0 > c1) return;
+        static_cast<int>(std::ceil(std::clamp(right.x - 0.5, -1.0, out_.width + 1.0))) - 1;
+    if (std::max(c0, 0) > std::min(c1, out_.width - 1)) return;
+    return FillClampedSpan(row, ref, left, right, width, std::max(c0, 0),
+                           std::min(c1, out_.width - 1));
+  }
+
+  void FillClampedSpan(int row, const TriangleRef& ref, const Edge& left, const Edge& right,
+                       double width, int c0, int c1) {
     const int n = layout_.count;
     Attrs a, da;
     const double t = c0 + 0.5 - left.x;

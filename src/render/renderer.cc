@@ -94,8 +94,9 @@ class ShadowMap {
 
   bool Lit(const Vec3d& point, double n_dot_l) const {
     const Vec3d s = camera_.Project(point);
-    const int col = static_cast<int>(std::floor(s.x())), row = static_cast<int>(std::floor(s.y()));
-    if (col < 0 || row < 0 || col >= camera_.width || row >= camera_.height) return true;
+    // Compared in double first: a point far outside (or NaN) must not reach an int cast.
+    if (!(s.x() >= 0 && s.y() >= 0 && s.x() < camera_.width && s.y() < camera_.height)) return true;
+    const int col = static_cast<int>(s.x()), row = static_cast<int>(s.y());
     const float stored = depth_[static_cast<std::size_t>(row) * camera_.width + col];
     // Slope-scaled bias: a surface seen at a grazing angle spans many depths within one texel.
     const double slope = std::sqrt(std::max(0.0, 1 - n_dot_l * n_dot_l)) / std::max(n_dot_l, 0.1);
@@ -292,9 +293,33 @@ void ApplyNoise(ImageF& image, const NoiseOptions& options, std::uint64_t index)
   }
 }
 
+double EstimateRenderBytes(const Scene& scene, const RenderOptions& options, bool per_light) {
+  const double s = options.supersampling;
+  const double pixels = static_cast<double>(scene.camera.width) * scene.camera.height;
+  const double samples = pixels * s * s;
+  const double images = 1.0 + (per_light ? scene.lighting.lights.size() : 0);
+  // G-buffer (depth, id, normal, uv, colour, coverage) ≈ 44 bytes, albedo and depth 16, and each
+  // image 12, per sample; the same again per output pixel after downsampling; mask and ids.
+  const double shadow_texels = options.shadows
+                                   ? static_cast<double>(options.shadow_map_size) *
+                                         options.shadow_map_size * scene.lighting.lights.size()
+                                   : 0.0;
+  return samples * (60 + 12 * images) + pixels * (36 + 12 * images) + 4 * shadow_texels;
+}
+
 RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_light) {
   Require(scene.Validate());
   Require(options.Validate());
+  RequireMemory(
+      options.memory, EstimateRenderBytes(scene, options, per_light),
+      "rendering " + std::to_string(scene.camera.width) + "x" +
+          std::to_string(scene.camera.height) +
+          (options.supersampling > 1 ? " with " + std::to_string(options.supersampling) + "x" +
+                                           std::to_string(options.supersampling) + " supersampling"
+                                     : std::string()) +
+          (per_light ? " and one image for each of the " +
+                           std::to_string(scene.lighting.lights.size()) + " lights"
+                     : std::string()));
   const int s = options.supersampling;
   Camera camera = scene.camera;
   camera.width *= s;

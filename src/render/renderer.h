@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "core/resources.h"
 #include "geometry/camera.h"
 #include "geometry/mesh.h"
 #include "reflectance/lighting.h"
@@ -59,7 +60,8 @@ struct RenderOptions {
   double shadow_bias_texels = 1.5;
   int supersampling = 1;  // s×s samples per pixel, box-filtered
   NoiseOptions noise;
-  int threads = 0;  // 0 = all cores
+  int threads = 0;     // 0 = all cores
+  MemoryLimit memory;  // Render refuses (ResourceError) what would not fit
 
   std::string Validate() const;
 };
@@ -75,8 +77,13 @@ struct RenderOutput {
   double shade_seconds = 0;
 };
 
-// Throws std::invalid_argument with a one-line message for an invalid scene or options.
+// Throws std::invalid_argument with a one-line message for an invalid scene or options, and
+// ResourceError when EstimateRenderBytes exceeds options.memory.
 RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_light);
+
+// The memory Render allocates: the G-buffer, ground truth and one image per light set at the
+// supersampled size, the downsampled results, and the shadow maps.
+double EstimateRenderBytes(const Scene& scene, const RenderOptions& options, bool per_light);
 
 // Adds the noise of `options` to an image; stream `index` makes each image's noise independent.
 void ApplyNoise(ImageF& image, const NoiseOptions& options, std::uint64_t index);

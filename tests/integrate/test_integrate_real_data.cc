@@ -10,7 +10,7 @@
 #include "io/dataset.h"
 #include "io/image_io.h"
 #include "io/mesh_io.h"
-#include "io/staging.h"
+#include "io/output_folder.h"
 #include "io/surface.h"
 #include "real_data_dir.h"
 #include "solve/metrics.h"
@@ -60,6 +60,7 @@ TEST_P(IntegrateRealData, GroundTruthNormalsIntegrateToAConsistentSurface) {
   const std::string path =
       testing::TempDir() + "/iphong_" +
       std::string(GetParam().path).substr(std::string(GetParam().path).rfind('/') + 1) + ".ply";
+  std::filesystem::remove(path);
   io::SaveMesh(path, mesh);
   const geometry::TriangleMesh read = io::LoadMesh(path);
   EXPECT_EQ(read.positions.size(), mesh.positions.size());
@@ -81,12 +82,15 @@ TEST(IntegrateRealDataCat, RecoveredNormalsBecomeAMeshThatReadsBack) {
   integration.allow_back_facing = true;
   const IntegrateResult result = IntegrateNormals(normals.normals, mask, integration);
   const std::string out_dir = testing::TempDir() + "/iphong_cat_surface";
+  std::filesystem::remove_all(out_dir);
   {
-    io::StagingDirectory out(out_dir);
+    io::OutputFolderOptions folder;
+    folder.command = "integrate";
+    io::OutputFolder out(out_dir, folder);
     io::SurfaceFileOptions files;
     files.albedo = &normals.albedo;
-    const io::SurfaceFiles written =
-        io::WriteSurfaceFiles(out, result, normals.normals, mask, io::FrameOf(integration), files);
+    const io::SurfaceFiles written = io::WriteSurfaceFiles(out, "", result, normals.normals, mask,
+                                                           io::FrameOf(integration), files);
     out.Commit();
     EXPECT_LT(written.consistency_mean_deg, 5.0);
     const geometry::TriangleMesh read = io::LoadMesh(out_dir + "/mesh.ply");

@@ -7,7 +7,9 @@
 
 #include "geometry/primitives.h"
 #include "io/dataset.h"
+#include "io/files.h"
 #include "io/mesh_io.h"
+#include "io/output_folder.h"
 #include "io/scene_file.h"
 #include "real_data_dir.h"
 
@@ -39,6 +41,16 @@ std::string ErrorOf(const std::function<void()>& f) {
     return e.what();
   }
   return "(no error)";
+}
+
+// A render output, as `iphong render` commits it.
+void WriteDataset(const std::string& dir, const SceneFile& f, const render::RenderOutput& out,
+                  bool per_light) {
+  OutputFolderOptions options;
+  options.command = "render";
+  OutputFolder folder(dir, options);
+  WriteRenderOutput(folder, "", f.scene, f.options, out, f.output, per_light);
+  folder.Commit();
 }
 
 const char* kMinimalScene = R"({"width": 32, "height": 24,
@@ -91,7 +103,7 @@ TEST_F(TempDir, SceneErrorsNameTheFileAndTheField) {
                 .find("parse error at line 2, column"),
             std::string::npos);
   EXPECT_EQ(ErrorOf([&] { LoadSceneFile(Path("absent.json")); }),
-            Path("absent.json") + ": cannot open");
+            Path("absent.json") + ": no such file");
 }
 
 TEST_F(TempDir, LightSetsRingAndHemisphere) {
@@ -124,7 +136,7 @@ TEST_F(TempDir, PerLightDatasetRoundTrip) {
   const render::RenderOutput out = render::Render(f.scene, f.options, true);
   for (const std::string format : {"exr", "png"}) {
     f.output.format = format;
-    WriteRenderOutput(Path("set-" + format), f.scene, f.options, out, f.output, true);
+    WriteDataset(Path("set-" + format), f, out, true);
     const Dataset d = LoadDataset(Path("set-" + format));
     ASSERT_EQ(d.images.size(), 5u);
     EXPECT_EQ(d.filenames[0], "001." + format);
@@ -148,23 +160,27 @@ TEST_F(TempDir, PerLightDatasetRoundTrip) {
   }
 }
 
-TEST_F(TempDir, WritingReplacesAtomicallyAndFailsCleanly) {
+TEST_F(TempDir, WritingRefusesForeignFoldersAndFailsCleanly) {
   SceneFile f = ParseScene(kMinimalScene, "minimal", "");
   const render::RenderOutput out = render::Render(f.scene, f.options, true);
   fs::create_directories(Path("out"));
-  Write("out/stale.txt", "old");
-  WriteRenderOutput(Path("out"), f.scene, f.options, out, f.output, false);
-  EXPECT_FALSE(fs::exists(Path("out/stale.txt")));
-  EXPECT_TRUE(fs::exists(Path("out/image.exr")));
+  Write("out/notes.txt", "mine");
+  // A folder iphong did not write is never used, let alone replaced.
+  EXPECT_NE(ErrorOf([&] {
+              WriteDataset(Path("out"), f, out, false);
+            }).find("is not empty and was not written by iphong"),
+            std::string::npos);
+  EXPECT_EQ(ReadTextFile(Path("out/notes.txt")), "mine");
+  EXPECT_FALSE(fs::exists(Path("out/image.exr")));
+  WriteDataset(Path("new"), f, out, false);
+  EXPECT_TRUE(fs::exists(Path("new/image.exr")));
   // A point light cannot go into the DiLiGenT layout: clear error, nothing written.
   f.scene.lighting.lights.push_back(reflectance::Light::Point(Vec3d(0, 0, 3), Vec3d::Ones(), true));
-  EXPECT_NE(ErrorOf([&] {
-              WriteRenderOutput(Path("pl"), f.scene, f.options, out, f.output, true);
-            }).find("point light"),
+  EXPECT_NE(ErrorOf([&] { WriteDataset(Path("pl"), f, out, true); }).find("point light"),
             std::string::npos);
   EXPECT_FALSE(fs::exists(Path("pl")));
   for (const auto& entry : fs::directory_iterator(dir_)) {
-    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos);
+    EXPECT_EQ(entry.path().filename().string().find(".iphong-partial"), std::string::npos);
   }
 }
 
@@ -177,7 +193,7 @@ class BadDataset : public TempDir {
         reflectance::Light::Directional(Vec3d(0.5, 0, 1), Vec3d::Ones()));
     const render::RenderOutput out = render::Render(f.scene, f.options, true);
     f.output.format = "png";
-    WriteRenderOutput(Path("d"), f.scene, f.options, out, f.output, true);
+    WriteDataset(Path("d"), f, out, true);
   }
   std::string LoadError() const {
     return ErrorOf([&] { LoadDataset(Path("d")); });
@@ -192,14 +208,15 @@ TEST_F(BadDataset, ShortLightFileNamesTheFile) {
 
 TEST_F(BadDataset, NanInLightFileNamesTheLine) {
   Write("d/light_directions.txt", "0 0 1\nnan 0 1\n");
-  EXPECT_EQ(LoadError(), Path("d/light_directions.txt") + ":2: not a finite number");
+  EXPECT_EQ(LoadError(), Path("d/light_directions.txt") + ":2: not a finite number: 'nan 0 1'");
   Write("d/light_directions.txt", "0 0 1\n0 1\n");
   EXPECT_EQ(LoadError(), Path("d/light_directions.txt") + ":2: expected 3 numbers, got '0 1'");
 }
 
 TEST_F(BadDataset, ZeroIntensityIsAnError) {
   Write("d/light_intensities.txt", "1 1 1\n1 0 1\n");
-  EXPECT_EQ(LoadError(), Path("d/light_intensities.txt") + ":2: light intensities must be > 0");
+  EXPECT_EQ(LoadError(),
+            Path("d/light_intensities.txt") + ":2: light intensities must be > 0 and at most 1e30");
 }
 
 TEST_F(BadDataset, UnnormalizedDirectionsAreNormalizedWithAWarning) {
@@ -220,6 +237,7 @@ TEST_F(BadDataset, SizeMismatchNamesTheFile) {
   fs::copy_file(Path("d/normals.png"), Path("d/mask.png"), fs::copy_options::overwrite_existing);
   EXPECT_EQ(LoadError().find(Path("d/mask.png")), std::string::npos);  // same size: fine
   ImageF small(8, 8, 3, 0.5f);
+  fs::remove(Path("d/002.png"));
   WriteImage(Path("d/002.png"), small, {16, Encoding::kLinear});
   EXPECT_EQ(LoadError(), Path("d/002.png") + ": is 8x8, but 001.png is 32x24");
 }
@@ -394,9 +412,10 @@ TEST_F(BadDataset, StreamingObservationsEqualLoadThenGather) {
   Write("d/002.png", "\x89PNG\r\n\x1a\n garbage");
   EXPECT_NE(ErrorOf([&] { LoadObservations(Path("d")); }).find("002.png"), std::string::npos);
   ImageF small(8, 8, 3, 0.5f);
+  fs::remove(Path("d/002.png"));
   WriteImage(Path("d/002.png"), small, {16, Encoding::kLinear});
   EXPECT_EQ(ErrorOf([&] { LoadObservations(Path("d")); }),
-            Path("d/002.png") + ": is 8x8, but the mask is 32x24");
+            Path("d/002.png") + ": is 8x8, but mask.png is 32x24");
 }
 
 }  // namespace

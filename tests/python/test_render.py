@@ -48,7 +48,7 @@ def test_scene_errors_raise_value_error_naming_the_field():
         iphong.render(bad)
     with pytest.raises(ValueError, match="unknown shading 'toon'"):
         iphong.render(dict(ISSUE_SCENE, shading="toon"))
-    with pytest.raises(ValueError, match="cannot open"):
+    with pytest.raises(ValueError, match="no such file"):
         iphong.render("no/such/scene.json")
 
 

@@ -1,0 +1,93 @@
+#include "iphong/console.h"
+
+#include <fcntl.h>
+#include <pthread.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <thread>
+
+#include "core/errors.h"
+#include "io/output_folder.h"
+
+namespace iphong::cli {
+namespace {
+
+// The process's one console: set once in SetUpConsole, before any other thread exists.
+FILE* own_stderr = stderr;
+bool own_stderr_tty = false;
+
+void WaitForSignals(sigset_t signals) {
+  int sig = 0;
+  if (sigwait(&signals, &sig) != 0) return;
+  io::AbandonOutputFolders();
+  std::fprintf(Err(), "iphong: interrupted (%s); unfinished output removed\n", strsignal(sig));
+  std::fflush(Err());
+  ::signal(sig, SIG_DFL);
+  sigset_t one;
+  sigemptyset(&one);
+  sigaddset(&one, sig);
+  pthread_sigmask(SIG_UNBLOCK, &one, nullptr);
+  raise(sig);
+  std::_Exit(128 + sig);
+}
+
+}  // namespace
+
+void SetUpConsole() {
+  ::signal(SIGXFSZ, SIG_IGN);
+  const char* keep = std::getenv("IPHONG_LIBRARY_STDERR");
+  if (!(keep && std::strcmp(keep, "1") == 0)) {
+    const int saved = ::fcntl(2, F_DUPFD_CLOEXEC, 3);
+    const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (saved >= 0 && null >= 0 && ::dup2(null, 2) >= 0) {
+      if (FILE* f = ::fdopen(saved, "w")) {
+        own_stderr = f;
+        std::setvbuf(f, nullptr, _IOLBF, 0);
+      }
+    }
+    if (null >= 0) ::close(null);
+  }
+  own_stderr_tty = ::isatty(::fileno(own_stderr));
+  // An exception nobody caught is a bug, and still gets one line.
+  std::set_terminate([] {
+    std::string what = "unknown";
+    if (auto p = std::current_exception()) {
+      try {
+        std::rethrow_exception(p);
+      } catch (const std::exception& e) {
+        what = e.what();
+      } catch (...) {
+      }
+    }
+    std::fprintf(Err(), "iphong: error: internal error (please report it): %s\n",
+                 OneLine(what).c_str());
+    std::fflush(Err());
+    std::_Exit(70);
+  });
+
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGHUP);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  try {
+    std::thread(WaitForSignals, signals).detach();
+  } catch (const std::system_error&) {
+    pthread_sigmask(SIG_UNBLOCK, &signals, nullptr);  // no watcher: default handling
+  }
+}
+
+FILE* Err() { return own_stderr; }
+
+bool ErrIsTerminal() { return own_stderr_tty; }
+
+void Warn(const std::string& message) {
+  std::fprintf(Err(), "iphong: warning: %s\n", OneLine(message).c_str());
+}
+
+}  // namespace iphong::cli

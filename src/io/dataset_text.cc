@@ -1,0 +1,161 @@
+#include "io/dataset_text.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <stdexcept>
+
+#include "io/json_reader.h"
+#include "io/scene_file.h"
+
+namespace iphong::io {
+namespace {
+
+[[noreturn]] void Fail(const std::string& source, const std::string& message, int line = 0) {
+  throw std::runtime_error(source + (line > 0 ? ":" + std::to_string(line) : "") + ": " + message);
+}
+
+// Non-blank lines with their numbers; "\r\n" endings accepted.
+std::vector<std::pair<int, std::string>> Lines(const std::string& text) {
+  std::vector<std::pair<int, std::string>> lines;
+  std::size_t start = 0;
+  for (int number = 1; start <= text.size(); ++number) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    std::string line = text.substr(start, end - start);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find_first_not_of(" \t") != std::string::npos) lines.emplace_back(number, line);
+    start = end + 1;
+  }
+  return lines;
+}
+
+// A line shown in a message: printable and short.
+std::string Shown(const std::string& line) {
+  std::string out;
+  for (char c : line.substr(0, 60)) out += (c >= 32 && c < 127) ? c : '?';
+  return line.size() > 60 ? out + "..." : out;
+}
+
+// Three numbers and nothing else; strtod, unlike operator>>, reads "nan" and "inf", so they get
+// their own message instead of "expected 3 numbers".
+Vec3d Triple(const std::string& line, const std::string& source, int number) {
+  if (line.find('\0') != std::string::npos) Fail(source, "not a text file", number);
+  Vec3d v;
+  const char* p = line.c_str();
+  int count = 0;
+  for (; count < 4; ++count) {
+    char* end = nullptr;
+    const double value = std::strtod(p, &end);
+    if (end == p) break;
+    if (count < 3) v[count] = value;
+    p = end;
+  }
+  if (count != 3 || std::string(p).find_first_not_of(" \t,") != std::string::npos) {
+    Fail(source, "expected 3 numbers, got '" + Shown(line) + "'", number);
+  }
+  if (!v.allFinite()) Fail(source, "not a finite number: '" + Shown(line) + "'", number);
+  return v;
+}
+
+}  // namespace
+
+std::vector<std::string> ParseFilenames(const std::string& text, const std::string& source,
+                                        std::size_t max_images) {
+  std::vector<std::string> names;
+  for (const auto& [number, line] : Lines(text)) {
+    const auto begin = line.find_first_not_of(" \t"), end = line.find_last_not_of(" \t");
+    std::string name = line.substr(begin, end - begin + 1);
+    for (unsigned char c : name) {
+      if (c < 32) Fail(source, "an image name with control characters", number);
+    }
+    if (names.size() == max_images) {
+      Fail(source, "lists more than " + std::to_string(max_images) + " images", number);
+    }
+    names.push_back(std::move(name));
+  }
+  if (names.empty()) Fail(source, "lists no images (one file name per line expected)");
+  return names;
+}
+
+std::vector<Vec3d> ParseTriples(const std::string& text, const std::string& source,
+                                std::size_t expected) {
+  std::vector<Vec3d> triples;
+  for (const auto& [number, line] : Lines(text)) {
+    if (triples.size() == expected) {
+      Fail(source,
+           "has more lines than the " + std::to_string(expected) + " images in filenames.txt",
+           number);
+    }
+    triples.push_back(Triple(line, source, number));
+  }
+  if (triples.size() != expected) {
+    Fail(source, "has " + std::to_string(triples.size()) + " lines for " +
+                     std::to_string(expected) + " images in filenames.txt");
+  }
+  return triples;
+}
+
+std::vector<Vec3d> ParseLightDirections(const std::string& text, const std::string& source,
+                                        std::size_t expected, std::vector<std::string>* warnings) {
+  std::vector<Vec3d> directions = ParseTriples(text, source, expected);
+  for (std::size_t i = 0; i < directions.size(); ++i) {
+    Vec3d& d = directions[i];
+    // Scaled first, so 1e308 components have a length instead of an infinite one.
+    const double scale = d.cwiseAbs().maxCoeff();
+    if (!(scale > 0)) Fail(source, "zero light direction", static_cast<int>(i + 1));
+    const double norm = (d / scale).norm() * scale;
+    if (std::abs(norm - 1) > 1e-3 && warnings) {
+      warnings->push_back(source + ":" + std::to_string(i + 1) + ": light direction has length " +
+                          std::to_string(norm) + "; normalized");
+    }
+    d = (d / scale).normalized();
+  }
+  return directions;
+}
+
+std::vector<Vec3d> ParseLightIntensities(const std::string& text, const std::string& source,
+                                         std::size_t expected) {
+  std::vector<Vec3d> intensities = ParseTriples(text, source, expected);
+  for (std::size_t i = 0; i < intensities.size(); ++i) {
+    if (!(intensities[i].array() > 0).all() || !(intensities[i].array() <= 1e30).all()) {
+      Fail(source, "light intensities must be > 0 and at most 1e30", static_cast<int>(i + 1));
+    }
+  }
+  return intensities;
+}
+
+ImageF ParseNormalText(const std::string& text, const std::string& source, int width, int height) {
+  const auto lines = Lines(text);
+  const std::size_t expected = static_cast<std::size_t>(width) * height;
+  if (lines.size() != expected) {
+    Fail(source, "has " + std::to_string(lines.size()) + " lines, expected " +
+                     std::to_string(expected) + " (width x height of the images)");
+  }
+  ImageF normals(width, height, 3);
+  for (std::size_t p = 0; p < lines.size(); ++p) {
+    const Vec3d n = Triple(lines[p].second, source, lines[p].first);
+    for (int c = 0; c < 3; ++c) normals.pixels[3 * p + c] = static_cast<float>(n[c]);
+  }
+  return normals;
+}
+
+DatasetMaterial ParseMaterialJson(const std::string& text, const std::string& source) {
+  const nlohmann::json document = JsonReader::Parse(text, source);
+  const JsonReader j(document, source);
+  j.OnlyKeys({"model", "ambient", "ka", "kd", "ks", "shininess", "comment"});
+  DatasetMaterial m;
+  try {
+    m.model = reflectance::ParseLobe(j.String("model", "phong"));
+  } catch (const std::invalid_argument& e) {
+    j.Field("model").Fail(e.what());
+  }
+  m.ambient = j.Rgb("ambient", Vec3d::Ones());
+  m.kd_known = j.Has("kd");
+  reflectance::Material unknown;  // ka, ks 0, shininess 1; kd only a placeholder when absent
+  unknown.kd = Vec3d::Ones();
+  m.material = ReadMaterialCoefficients(j, unknown);
+  if ((m.ambient.array() < 0).any()) j.Field("ambient").Fail("must be >= 0");
+  return m;
+}
+
+}  // namespace iphong::io

@@ -1,0 +1,44 @@
+// The text files of a dataset, parsed from memory: filenames.txt, light_directions.txt,
+// light_intensities.txt, normal.txt and material.json. Kept apart from the file reading so the
+// fuzz target (tests/fuzz) drives exactly what LoadDataset runs. Every error is a
+// std::runtime_error "SOURCE[:LINE]: what is wrong (what is expected)".
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "core/types.h"
+#include "reflectance/material.h"
+
+namespace iphong::io {
+
+// Coefficients from material.json. kd is optional: absent means an unknown per-pixel albedo.
+struct DatasetMaterial {
+  reflectance::Lobe model = reflectance::Lobe::kPhong;
+  Vec3d ambient = Vec3d::Zero();
+  reflectance::Material material;
+  bool kd_known = false;
+};
+
+// One image name per non-blank line, trimmed; at least one, at most `max_images`.
+std::vector<std::string> ParseFilenames(const std::string& text, const std::string& source,
+                                        std::size_t max_images = 100000);
+
+// `expected` lines of three finite numbers.
+std::vector<Vec3d> ParseTriples(const std::string& text, const std::string& source,
+                                std::size_t expected);
+
+// Light directions: non-zero, normalized (lengths off 1 by more than 1e-3 are reported in
+// `warnings`). Intensities: each channel in (0, 1e30].
+std::vector<Vec3d> ParseLightDirections(const std::string& text, const std::string& source,
+                                        std::size_t expected, std::vector<std::string>* warnings);
+std::vector<Vec3d> ParseLightIntensities(const std::string& text, const std::string& source,
+                                         std::size_t expected);
+
+// width × height lines "nx ny nz", row-major from the top row.
+ImageF ParseNormalText(const std::string& text, const std::string& source, int width, int height);
+
+DatasetMaterial ParseMaterialJson(const std::string& text, const std::string& source);
+
+}  // namespace iphong::io
