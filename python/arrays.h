@@ -1,8 +1,12 @@
-// numpy views of iphong's arrays, shared by the binding files (copies, C order).
+// Conversions between Python values and iphong's types, shared by the binding files: numpy views
+// of iphong's arrays (copies, C order), and numbers, triples and arrays read from Python values
+// with messages that name the argument — TypeError for a value of the wrong type, ValueError for a
+// wrong value; never a crash, never pybind11's "Unable to cast".
 #pragma once
 
 #include <pybind11/numpy.h>
 
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -50,6 +54,71 @@ inline py::array_t<float> Stack(const std::vector<ImageF>& images) {
     out += image.pixels.size();
   }
   return array;
+}
+
+inline std::string TypeName(const py::handle& value) {
+  return py::str(py::type::handle_of(value).attr("__name__"));
+}
+
+// A finite number: int, float or anything with __float__ (numpy scalars), not str or bool.
+inline double ToNumber(const py::handle& value, const std::string& what) {
+  if (value.is_none() || py::isinstance<py::str>(value) || py::isinstance<py::bytes>(value) ||
+      py::isinstance<py::bool_>(value) || !PyNumber_Check(value.ptr())) {
+    throw py::type_error(what + ": expected a number, got " + TypeName(value));
+  }
+  PyObject* as_float = PyNumber_Float(value.ptr());
+  if (as_float == nullptr) {
+    PyErr_Clear();
+    throw py::type_error(what + ": expected a number, got " + TypeName(value));
+  }
+  const double v = PyFloat_AsDouble(as_float);
+  Py_DECREF(as_float);
+  if (!std::isfinite(v)) throw std::invalid_argument(what + ": expected a finite number");
+  return v;
+}
+
+// Exactly `count` finite numbers (a list, tuple or array of any shape with that many values).
+inline std::vector<double> ToNumbers(const py::handle& value, std::size_t count,
+                                     const std::string& what) {
+  const std::string expected = "expected " + std::to_string(count) + " numbers";
+  if (value.is_none() || py::isinstance<py::str>(value) || py::isinstance<py::bytes>(value) ||
+      py::isinstance<py::dict>(value)) {
+    throw py::type_error(what + ": " + expected + ", got " + TypeName(value));
+  }
+  auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(value);
+  if (!a) {
+    PyErr_Clear();
+    throw py::type_error(what + ": " + expected + ", got " + TypeName(value));
+  }
+  if (static_cast<std::size_t>(a.size()) != count) {
+    throw std::invalid_argument(what + ": " + expected + ", got " + std::to_string(a.size()));
+  }
+  std::vector<double> numbers(a.data(), a.data() + count);
+  for (double v : numbers) {
+    if (!std::isfinite(v)) throw std::invalid_argument(what + ": expected finite numbers");
+  }
+  return numbers;
+}
+
+inline Vec3d ToVec3(const py::handle& value, const std::string& what) {
+  const std::vector<double> v = ToNumbers(value, 3, what);
+  return Vec3d(v[0], v[1], v[2]);
+}
+
+// An RGB triple given as 3 numbers or one number (grey).
+inline Vec3d ToRgb(const py::handle& value, const std::string& what) {
+  if (PyNumber_Check(value.ptr()) && !py::isinstance<py::array>(value) &&
+      !py::isinstance<py::str>(value)) {
+    return Vec3d::Constant(ToNumber(value, what));
+  }
+  return ToVec3(value, what);
+}
+
+inline std::string ToText(const py::handle& value, const std::string& what) {
+  if (!py::isinstance<py::str>(value)) {
+    throw py::type_error(what + ": expected a string, got " + TypeName(value));
+  }
+  return value.cast<std::string>();
 }
 
 // From numpy: a (H, W) boolean mask (None = everything) and a (H, W, 3) float image.

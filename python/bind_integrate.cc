@@ -39,11 +39,11 @@ geometry::HeightMapFrame Frame(double pixel_size, const py::object& intrinsics) 
   geometry::HeightMapFrame frame;
   frame.pixel_size = pixel_size;
   if (!intrinsics.is_none()) {
-    const auto k = intrinsics.cast<std::vector<double>>();
-    if (k.size() != 4) throw std::invalid_argument("intrinsics must be (fx, fy, cx, cy)");
+    const std::vector<double> k = ToNumbers(intrinsics, 4, "intrinsics (fx, fy, cx, cy)");
     frame.perspective = true;
     frame.fx = k[0], frame.fy = k[1], frame.cx = k[2], frame.cy = k[3];
   }
+  if (auto m = frame.Validate(); !m.empty()) throw std::invalid_argument(m);
   return frame;
 }
 

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "arrays.h"
 #include "bindings.h"
 #include "reflectance/lighting.h"
 #include "reflectance/material.h"
@@ -21,22 +22,6 @@ namespace {
 using reflectance::Light;
 using reflectance::Lighting;
 using reflectance::Material;
-
-Vec3d ToVec3(const py::handle& value, const char* what) {
-  auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(value);
-  if (!array || array.size() != 3) {
-    throw std::invalid_argument(std::string(what) + " must be a 3-vector");
-  }
-  return Vec3d(array.at(0), array.at(1), array.at(2));
-}
-
-// An RGB triple given as 3 numbers or one number (grey).
-Rgb ToRgb(const py::handle& value, const char* what) {
-  if (py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value)) {
-    return Rgb::Constant(value.cast<double>());
-  }
-  return ToVec3(value, what);
-}
 
 std::string Repr(const Vec3d& v) {
   std::ostringstream out;
@@ -109,12 +94,12 @@ py::array ShadeArrays(const py::array& normal_in, const py::object& view_in,
 void BindReflectance(py::module_& m) {
   py::class_<Material>(m, "Material", "Phong material: ka, kd, ks (RGB) and shininess n.")
       .def(py::init([](const py::object& ka, const py::object& kd, const py::object& ks,
-                       double shininess) {
+                       const py::object& shininess) {
              Material material;
              material.ka = ToRgb(ka, "ka");
              material.kd = ToRgb(kd, "kd");
              material.ks = ToRgb(ks, "ks");
-             material.shininess = shininess;
+             material.shininess = ToNumber(shininess, "shininess");
              reflectance::CheckMaterial(material);
              return material;
            }),

@@ -16,8 +16,21 @@ namespace py = pybind11;
 namespace iphong::python {
 namespace {
 
-py::dict RenderScene(const io::SceneFile& file, bool per_light) {
+// The memory limit of a call: max_memory_gb, or the default (3/4 of the machine's).
+MemoryLimit Limit(const py::object& max_memory_gb) {
+  MemoryLimit limit;
+  limit.knob = "max_memory_gb=";
+  if (!max_memory_gb.is_none()) {
+    const double gb = ToNumber(max_memory_gb, "max_memory_gb");
+    if (!(gb > 0)) throw std::invalid_argument("max_memory_gb: expected a number > 0");
+    limit.bytes = static_cast<std::uint64_t>(gb * 1e9);
+  }
+  return limit;
+}
+
+py::dict RenderScene(io::SceneFile file, bool per_light, const MemoryLimit& memory) {
   render::RenderOutput out;
+  file.options.memory = memory;
   {
     py::gil_scoped_release release;
     out = render::Render(file.scene, file.options, per_light);
@@ -44,35 +57,32 @@ py::dict RenderScene(const io::SceneFile& file, bool per_light) {
 }  // namespace
 
 void BindRender(py::module_& m) {
-  // std::runtime_error from io (a file or field named in the message) becomes ValueError too:
-  // for Python callers it is bad input, like the rest.
-  py::register_exception_translator([](std::exception_ptr p) {
-    try {
-      if (p) std::rethrow_exception(p);
-    } catch (const std::runtime_error& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
-    }
-  });
-
   m.def(
       "_render_json",
       [](const std::string& text, const std::string& source, const std::string& base_dir,
-         bool per_light) { return RenderScene(io::ParseScene(text, source, base_dir), per_light); },
-      py::arg("text"), py::arg("source"), py::arg("base_dir"), py::arg("per_light"));
+         bool per_light, const py::object& max_memory_gb) {
+        const MemoryLimit memory = Limit(max_memory_gb);
+        return RenderScene(io::ParseScene(text, source, base_dir, memory), per_light, memory);
+      },
+      py::arg("text"), py::arg("source"), py::arg("base_dir"), py::arg("per_light"),
+      py::arg("max_memory_gb") = py::none());
   m.def(
       "_render_file",
-      [](const std::string& path, bool per_light) {
-        return RenderScene(io::LoadSceneFile(path), per_light);
+      [](const std::string& path, bool per_light, const py::object& max_memory_gb) {
+        const MemoryLimit memory = Limit(max_memory_gb);
+        return RenderScene(io::LoadSceneFile(path, memory), per_light, memory);
       },
-      py::arg("path"), py::arg("per_light"));
+      py::arg("path"), py::arg("per_light"), py::arg("max_memory_gb") = py::none());
 
   m.def(
       "load_dataset",
-      [](const std::string& directory) {
+      [](const std::string& directory, const py::object& max_memory_gb) {
         io::Dataset d;
+        io::DatasetLoadOptions options;
+        options.memory = Limit(max_memory_gb);
         {
           py::gil_scoped_release release;
-          d = io::LoadDataset(directory);
+          d = io::LoadDataset(directory, options);
         }
         py::dict result;
         result["images"] = Stack(d.images);
@@ -97,11 +107,12 @@ void BindRender(py::module_& m) {
         result["warnings"] = d.warnings;
         return result;
       },
-      py::arg("directory"),
+      py::arg("directory"), py::arg("max_memory_gb") = py::none(),
       R"doc(Read a dataset directory (DiLiGenT layout) into numpy arrays:
 images (K, H, W, 3) float32 linear, light_directions (K, 3), light_intensities (K, 3),
 mask (H, W) bool, normal_gt (H, W, 3) or None, material (dict) or None, filenames, warnings.
-Raises ValueError naming the file (and line) on bad input.)doc");
+Raises ValueError naming the file (and line) on bad input, and when the images would need more
+memory than max_memory_gb (default: three quarters of the machine's).)doc");
 }
 
 }  // namespace iphong::python

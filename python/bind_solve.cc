@@ -68,32 +68,51 @@ void BindSolve(py::module_& m) {
         options.varying_specular = varying_specular;
         options.specular_prior = specular_prior;
         if (!material.is_none()) {
-          const py::dict d = material.cast<py::dict>();
-          auto rgb = [&](const char* key, const Vec3d& fallback) -> Vec3d {
-            if (!d.contains(key)) return fallback;
-            const py::object v = d[key];
-            if (py::isinstance<py::float_>(v) || py::isinstance<py::int_>(v)) {
-              return Vec3d::Constant(v.cast<double>());
-            }
-            return Rows(DoubleArray::ensure(v).reshape({1, 3}), 1, key)[0];
-          };
-          options.material_known = true;
-          options.ambient_term =
-              rgb("ambient", Vec3d::Ones()).cwiseProduct(rgb("ka", Vec3d::Zero()));
-          options.ks = rgb("ks", Vec3d::Zero());
-          options.shininess = d.contains("shininess") ? d["shininess"].cast<double>() : 1.0;
-          if (d.contains("model") && model == "phong") {
-            options.model = reflectance::ParseLobe(d["model"].cast<std::string>());
+          if (!py::isinstance<py::dict>(material)) {
+            throw py::type_error(
+                "material: expected a dict with ka, kd, ks, shininess, ambient, "
+                "model; got " +
+                TypeName(material));
           }
+          const py::dict d = material.cast<py::dict>();
+          for (const auto& item : d) {
+            const std::string key = py::str(item.first);
+            if (key != "ka" && key != "kd" && key != "ks" && key != "shininess" &&
+                key != "ambient" && key != "model") {
+              throw std::invalid_argument("material: unknown key '" + key +
+                                          "' (ka, kd, ks, shininess, ambient, model)");
+            }
+          }
+          auto rgb = [&](const char* key, const Vec3d& fallback) -> Vec3d {
+            return d.contains(key) ? ToRgb(d[key], std::string("material['") + key + "']")
+                                   : fallback;
+          };
+          reflectance::Material coefficients;
+          coefficients.ka = rgb("ka", Vec3d::Zero());
+          coefficients.kd = rgb("kd", Vec3d::Ones());
+          coefficients.ks = rgb("ks", Vec3d::Zero());
+          coefficients.shininess =
+              d.contains("shininess") ? ToNumber(d["shininess"], "material['shininess']") : 1.0;
+          if (auto m = reflectance::ValidateMaterial(coefficients); !m.empty()) {
+            throw std::invalid_argument(m);
+          }
+          const Vec3d ambient = rgb("ambient", Vec3d::Ones());
+          if ((ambient.array() < 0).any()) {
+            throw std::invalid_argument("material['ambient']: must be >= 0");
+          }
+          options.material_known = true;
+          options.ambient_term = ambient.cwiseProduct(coefficients.ka);
+          options.ks = coefficients.ks;
+          options.shininess = coefficients.shininess;
+          if (d.contains("model") && model == "phong") {
+            options.model = reflectance::ParseLobe(ToText(d["model"], "material['model']"));
+          }
+          if (d.contains("kd")) options.known_albedo = coefficients.kd;
         }
-        if (k < 3 && (material.is_none() || !material.cast<py::dict>().contains("kd"))) {
+        if (k < 3 && !options.known_albedo) {
           throw std::invalid_argument(
               "with 1 or 2 images pass material={'kd': ..., ...}: the coefficients must be "
               "known");
-        }
-        if (!material.is_none() && material.cast<py::dict>().contains("kd")) {
-          options.known_albedo = Rows(
-              DoubleArray::ensure(material.cast<py::dict>()["kd"]).reshape({1, 3}), 1, "kd")[0];
         }
         solve::NormalResult result;
         {

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <optional>
 
+#include "core/errors.h"
 #include "io/dataset.h"
 #include "io/files.h"
 #include "io/output_folder.h"
@@ -50,7 +51,14 @@ void RunRender(const RenderCommandOptions& o) {
   folder.inputs.push_back(o.scene_path);
   io::OutputFolder output(o.output_dir, folder);
 
-  const render::RenderOutput out = render::Render(file.scene, file.options, o.per_light);
+  render::RenderOutput out;
+  try {
+    out = render::Render(file.scene, file.options, o.per_light);
+  } catch (const ResourceError& e) {
+    throw ResourceError(o.scene_path + ": " + e.what());
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(o.scene_path + ": " + e.what());
+  }
   if (out.mask.count() == 0) {
     throw std::runtime_error(o.scene_path +
                              ": nothing is visible: every object is outside the camera's view "

@@ -29,23 +29,33 @@ import os as _os
 from . import _core
 
 
-def render(scene, per_light=False):
+def render(scene, per_light=False, max_memory_gb=None):
     """Render a scene (a dict in the scene-file format, or the path of a scene JSON file).
 
     Returns a dict of numpy arrays, nothing written to disk: image (H, W, 3) float32 linear with
     all lights, images (K, H, W, 3) one per light when per_light, normals (H, W, 3) ground truth
     (0 outside the mask), depth (H, W), albedo (H, W, 3), mask (H, W) bool, light_directions (K, 3)
     and light_intensities (K, 3). Relative paths in a dict resolve against the working directory.
-    Raises ValueError naming the field on a bad scene.
+    Raises ValueError naming the field on a bad scene, and when the render would need more memory
+    than max_memory_gb (default: three quarters of the machine's); TypeError for a scene that is
+    neither a dict nor a path.
     """
     if isinstance(scene, dict):
-        return _core._render_json(_json.dumps(scene), "scene", _os.getcwd(), per_light)
-    return _core._render_file(_os.fspath(scene), per_light)
+        try:
+            text = _json.dumps(scene, allow_nan=False)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"scene: not JSON: {error}") from None
+        return _core._render_json(text, "scene", _os.getcwd(), per_light, max_memory_gb)
+    if not isinstance(scene, (str, bytes, _os.PathLike)):
+        raise TypeError(f"scene: expected a dict or a path, got {type(scene).__name__}")
+    return _core._render_file(_os.fsdecode(scene), per_light, max_memory_gb)
 
 
-def load_dataset(directory):
+def load_dataset(directory, max_memory_gb=None):
     """Read a dataset directory (DiLiGenT layout) into numpy arrays; see _core.load_dataset."""
-    return _core.load_dataset(_os.fspath(directory))
+    if not isinstance(directory, (str, bytes, _os.PathLike)):
+        raise TypeError(f"directory: expected a path, got {type(directory).__name__}")
+    return _core.load_dataset(_os.fsdecode(directory), max_memory_gb)
 
 
 load_dataset.__doc__ = _core.load_dataset.__doc__

@@ -1,8 +1,20 @@
 #include "geometry/height_map.h"
 
 #include <cmath>
+#include <stdexcept>
+
+#include <cmath>
 
 namespace iphong::geometry {
+
+std::string HeightMapFrame::Validate() const {
+  if (!(pixel_size > 0) || !std::isfinite(pixel_size)) return "pixel size must be finite and > 0";
+  if (perspective && !(fx > 0 && fy > 0 && std::isfinite(fx) && std::isfinite(fy) &&
+                       std::isfinite(cx) && std::isfinite(cy))) {
+    return "intrinsics need finite fx, fy > 0 and a finite principal point (cx, cy)";
+  }
+  return "";
+}
 
 Vec3d HeightMapPoint(const HeightMapFrame& frame, int width, int height, int col, int row,
                      double value) {
@@ -25,6 +37,7 @@ bool Valid(const ImageF& height, const Mask& mask, int c, int r) {
 
 TriangleMesh MeshFromHeightMap(const ImageF& height, const Mask& mask, const HeightMapFrame& frame,
                                const HeightMeshOptions& options, std::vector<int>* vertex_pixel) {
+  if (auto m = frame.Validate(); !m.empty()) throw std::invalid_argument(m);
   const int w = height.width, h = height.height;
   TriangleMesh mesh;
   std::vector<int> vertex(static_cast<std::size_t>(w) * h, -1);  // pixel → vertex
@@ -84,6 +97,7 @@ TriangleMesh MeshFromHeightMap(const ImageF& height, const Mask& mask, const Hei
 }
 
 ImageF NormalsFromHeightMap(const ImageF& height, const Mask& mask, const HeightMapFrame& frame) {
+  if (auto m = frame.Validate(); !m.empty()) throw std::invalid_argument(m);
   const int w = height.width, h = height.height;
   ImageF normals(w, h, 3, 0.0f);
   auto point = [&](int c, int r) { return HeightMapPoint(frame, w, h, c, r, *height.at(c, r)); };

@@ -20,6 +20,10 @@ struct HeightMapFrame {
   double pixel_size = 1.0;  // orthographic
   bool perspective = false;
   double fx = 0, fy = 0, cx = 0, cy = 0;
+
+  // "" or what is wrong: pixel size finite and > 0; perspective: fx, fy finite and > 0 and a
+  // finite principal point.
+  std::string Validate() const;
 };
 
 // The camera-frame point of pixel (col, row) with height (orthographic) or depth (perspective).

@@ -46,12 +46,6 @@ std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHead
     Fail(path, "empty or not a 2D image");
   }
   const double pixels = static_cast<double>(spec.width) * spec.height;
-  if (pixels > kMaxPixels || spec.nchannels > 64) {
-    Fail(path, "declares " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + "x" +
-                   std::to_string(spec.nchannels) +
-                   ", more than iphong handles (2^31 pixels, 64 "
-                   "channels)");
-  }
   const int bits =
       spec.get_int_attribute("oiio:BitsPerSample", static_cast<int>(spec.format.size()) * 8);
   const double declared = pixels * spec.nchannels * std::max(bits, 1) / 8.0;
@@ -59,6 +53,11 @@ std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHead
     Fail(path, "declares " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
                    " pixels but has only " + std::to_string(file_bytes) +
                    " bytes: truncated or corrupt");
+  }
+  if (pixels > kMaxPixels || spec.nchannels > 64) {
+    Fail(path, "declares " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + "x" +
+                   std::to_string(spec.nchannels) +
+                   ", more than iphong handles (2^31 pixels, 64 channels)");
   }
   *header = {spec.width, spec.height, spec.nchannels};
   return in;

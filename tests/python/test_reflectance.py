@@ -125,7 +125,7 @@ def test_presets_are_published_values():
 @pytest.mark.parametrize("kwargs, message", [
     (dict(ka=-0.1), "ka"),
     (dict(kd=[0.5, float("nan"), 0.5]), "kd"),
-    (dict(ks=[1, 2]), "3-vector"),
+    (dict(ks=[1, 2]), "ks: expected 3 numbers, got 2"),
     (dict(shininess=-3), "shininess"),
 ])
 def test_bad_materials_raise_value_error(kwargs, message):
