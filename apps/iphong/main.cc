@@ -3,6 +3,7 @@
 
 #include "core/errors.h"
 #include "core/version.h"
+#include "io/output_folder.h"
 #include "iphong/commands.h"
 #include "iphong/console.h"
 
@@ -15,7 +16,8 @@ std::string ParsedCommand(const CLI::App& app) {
 }
 
 int Fail(const std::string& message, int code) {
-  std::fprintf(iphong::cli::Err(), "iphong: error: %s\n", iphong::OneLine(message).c_str());
+  std::fprintf(iphong::cli::Err(), "iphong: error: %s\n",
+               iphong::OneLine(iphong::io::WithoutStagingNames(message)).c_str());
   return code;
 }
 
@@ -30,6 +32,19 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.footer(iphong::cli::kExitCodes);
   iphong::cli::AddAllCommands(app);
+  // CLI11 reports an unknown command as "A subcommand is required"; say what was typed.
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string known;
+    bool found = false;
+    for (const CLI::App* sub : app.get_subcommands({})) {
+      found |= sub->get_name() == argv[1];
+      known += (known.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!found) {
+      return Fail(std::string(argv[1]) + ": no such command (" + known + ")",
+                  iphong::cli::kExitUsage);
+    }
+  }
   int code = 0;
   try {
     app.parse(argc, argv);

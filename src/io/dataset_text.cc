@@ -1,6 +1,7 @@
 #include "io/dataset_text.h"
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 
@@ -105,8 +106,10 @@ std::vector<Vec3d> ParseLightDirections(const std::string& text, const std::stri
     if (!(scale > 0)) Fail(source, "zero light direction", static_cast<int>(i + 1));
     const double norm = (d / scale).norm() * scale;
     if (std::abs(norm - 1) > 1e-3 && warnings) {
+      char length[32];
+      std::snprintf(length, sizeof length, "%.6g", norm);
       warnings->push_back(source + ":" + std::to_string(i + 1) + ": light direction has length " +
-                          std::to_string(norm) + "; normalized");
+                          length + "; normalized");
     }
     d = (d / scale).normalized();
   }

@@ -8,7 +8,9 @@
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
@@ -27,10 +29,68 @@ using OmMesh = OpenMesh::TriMesh_ArrayKernelT<Traits>;
 // OpenMesh narrates every write on its info log; errors still go to its error log.
 void QuietOpenMeshInfoLog() { omlog().disable(); }
 
+std::string Lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// OpenMesh reserves what a header declares, so a forged 300-byte PLY that declares a billion
+// vertices would end in std::bad_alloc. Headers with counts (PLY, OFF, binary STL) are checked
+// against the file's size first: every element takes at least one byte per property (PLY), an
+// ASCII OFF vertex at least 6 ("0 0 0\n") and a face at least 8, a binary STL facet 50.
+void CheckDeclaredCounts(const std::string& path, std::uint64_t file_size) {
+  std::ifstream file(path, std::ios::binary);
+  std::string head(65536, '\0');
+  file.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(file.gcount()));
+  double needed = 0;
+  std::string what;
+  std::istringstream lines(head);
+  std::string line;
+  const std::string ext = Lower(fs::path(path).extension().string());
+  if (head.rfind("ply", 0) == 0) {
+    double count = 0;
+    while (std::getline(lines, line) && line.rfind("end_header", 0) != 0) {
+      std::istringstream words(line);
+      std::string keyword, name;
+      words >> keyword;
+      if (keyword == "element") {
+        words >> name >> count;
+        if (!words || count < 0) throw std::runtime_error(path + ": bad PLY header: " + line);
+        what += (what.empty() ? "" : " and ") + std::to_string(static_cast<long long>(count)) +
+                " " + name;
+      } else if (keyword == "property") {
+        needed += count;
+      }
+    }
+    what += " elements";
+  } else if (ext == ".off") {
+    std::getline(lines, line);  // "OFF" (or its variants)
+    while (std::getline(lines, line) && (line.empty() || line[0] == '#')) {
+    }
+    std::istringstream words(line);
+    double vertices = 0, faces = 0;
+    if (words >> vertices >> faces && vertices >= 0 && faces >= 0) {
+      needed = 6 * vertices + 8 * faces;
+      what = std::to_string(static_cast<long long>(vertices)) + " vertices, " +
+             std::to_string(static_cast<long long>(faces)) + " faces";
+    }
+  } else if (ext == ".stl" && head.rfind("solid", 0) != 0 && head.size() >= 84) {
+    std::uint32_t facets = 0;
+    std::memcpy(&facets, head.data() + 80, 4);
+    needed = 84 + 50.0 * facets;
+    what = std::to_string(facets) + " facets";
+  }
+  if (needed > static_cast<double>(file_size)) {
+    throw std::runtime_error(path + ": declares " + what + " but has only " +
+                             std::to_string(file_size) + " bytes: truncated or corrupt");
+  }
+}
+
 }  // namespace
 
 geometry::TriangleMesh LoadMesh(const std::string& path, const MeshLoadOptions& options) {
-  RequireRegularFile(path);
+  CheckDeclaredCounts(path, RequireRegularFile(path));
   QuietOpenMeshInfoLog();
   OmMesh om;
   om.request_vertex_normals();
@@ -38,7 +98,13 @@ geometry::TriangleMesh LoadMesh(const std::string& path, const MeshLoadOptions& 
   OpenMesh::IO::Options io_options;
   io_options += OpenMesh::IO::Options::VertexNormal;
   io_options += OpenMesh::IO::Options::VertexTexCoord;
-  if (!OpenMesh::IO::read_mesh(om, path, io_options)) {
+  bool read = false;
+  try {
+    read = OpenMesh::IO::read_mesh(om, path, io_options);
+  } catch (const std::bad_alloc&) {
+    throw std::runtime_error(path + ": the mesh does not fit in memory (corrupt file?)");
+  }
+  if (!read) {
     throw std::runtime_error(path + ": cannot read the mesh (OBJ, PLY, OFF or STL expected)");
   }
   if (om.n_faces() == 0) throw std::runtime_error(path + ": the mesh has no faces");

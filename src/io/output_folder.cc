@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <cstring>
 #include <nlohmann/json.hpp>
+#include <regex>
 
 #include "core/errors.h"
 #include "core/version.h"
@@ -497,6 +498,14 @@ void OutputFolder::Abandon() {
   if (committed_ || abandoned_) return;
   RemoveStaging();
   abandoned_ = true;
+}
+
+std::string WithoutStagingNames(const std::string& message) {
+  // ".NAME.iphong-partial-PID-N" (a new folder staged beside it) -> "NAME";
+  // ".iphong-partial-PID-N/" (staged inside the folder) -> "".
+  static const std::regex beside(R"(\.([^/ ]+)\.iphong-partial-[0-9]+-[0-9]+)");
+  static const std::regex inside(R"(/\.iphong-partial-[0-9]+-[0-9]+/)");
+  return std::regex_replace(std::regex_replace(message, beside, "$1"), inside, "/");
 }
 
 void AbandonOutputFolders() {

@@ -91,6 +91,10 @@ void AbandonOutputFolders();
 // Does nothing when another iphong process holds the folder.
 void FinishInterruptedCommit(const std::string& folder);
 
+// Messages from writers name the staging path (".out.iphong-partial-123-0/normals.exr"); this
+// names the file where the user will look for it ("out/normals.exr").
+std::string WithoutStagingNames(const std::string& message);
+
 // A single output file (`eval --error-map`): `write` writes it, verified, at the temporary path it
 // is given; then it takes `path`'s name. Without `overwrite` an existing `path` is an error and
 // is never replaced; `inputs` may not name `path`. Throws OutputError.

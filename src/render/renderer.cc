@@ -317,8 +317,7 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
           (options.supersampling > 1 ? " with " + std::to_string(options.supersampling) + "x" +
                                            std::to_string(options.supersampling) + " supersampling"
                                      : std::string()) +
-          (per_light ? " and one image for each of the " +
-                           std::to_string(scene.lighting.lights.size()) + " lights"
+          (per_light ? " and " + std::to_string(scene.lighting.lights.size()) + " per-light images"
                      : std::string()));
   const int s = options.supersampling;
   Camera camera = scene.camera;
