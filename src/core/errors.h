@@ -25,15 +25,32 @@ struct OutputError : std::runtime_error {
 
 namespace iphong {
 
-// Messages from libraries may span lines (OpenImageIO's do); iphong prints one line per error.
-inline std::string OneLine(std::string text) {
-  for (char& c : text) {
-    if (c == '\n' || c == '\r' || c == '\t') c = ' ';
-  }
+// Messages from libraries may span lines (OpenImageIO's do) and may quote bytes of a broken
+// input; iphong prints one line of valid UTF-8 per error: control characters become spaces,
+// runs of spaces one, bytes that are not UTF-8 '?'.
+inline std::string OneLine(const std::string& text) {
   std::string out;
-  for (char c : text) {
-    if (c == ' ' && (out.empty() || out.back() == ' ')) continue;
-    out += c;
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c < 0x80) {
+      const char plain = c < 0x20 || c == 0x7f ? ' ' : static_cast<char>(c);
+      if (!(plain == ' ' && (out.empty() || out.back() == ' '))) out += plain;
+      ++i;
+      continue;
+    }
+    // A well-formed multi-byte sequence is kept whole.
+    const int length = c >= 0xf0 && c <= 0xf4 ? 4 : c >= 0xe0 ? 3 : c >= 0xc2 && c < 0xe0 ? 2 : 0;
+    bool valid = length > 0 && i + length <= text.size();
+    for (int k = 1; valid && k < length; ++k) {
+      valid = (static_cast<unsigned char>(text[i + k]) & 0xc0) == 0x80;
+    }
+    if (valid) {
+      out.append(text, i, length);
+      i += length;
+    } else {
+      out += '?';
+      ++i;
+    }
   }
   while (!out.empty() && out.back() == ' ') out.pop_back();
   return out;

@@ -36,8 +36,10 @@ def snapshot(root):
         relative = str(path.relative_to(root))
         if path.is_dir() and not path.is_symlink():
             state[relative + "/"] = None
-        else:
+        elif path.is_file():
             state[relative] = hashlib.sha256(path.read_bytes()).hexdigest()
+        else:  # a FIFO or a socket: reading would block
+            state[relative] = "special"
     return state
 
 

@@ -368,7 +368,7 @@ def test_sigkill_at_any_moment_leaves_the_old_or_the_new_output(slow_dataset, tm
     duration = time.monotonic() - duration
     rng = random.Random(10)
     outcomes = {"old": 0, "new": 0, "journal": 0}
-    for _ in range(12):
+    for _ in range(10):
         process = start("normals", slow_dataset, "-o", out, "--overwrite")
         time.sleep(rng.uniform(0.05, 1.2 * duration))
         process.kill()

@@ -1,0 +1,89 @@
+"""Bad input to the Python module: ValueError (TypeError for a value of the wrong Python type)
+with a one-line message naming the argument — never a segfault, RuntimeError or pybind11's
+"Unable to cast" (issue 10)."""
+import numpy as np
+import pytest
+
+import iphong
+
+IMAGES = np.zeros((3, 4, 4, 3), np.float32)
+LIGHTS = np.eye(3)
+
+
+@pytest.mark.parametrize("material, error, pattern", [
+    ({"ks": "shiny", "shininess": 10}, TypeError, r"material\['ks'\]: expected 3 numbers, got str"),
+    ({"ks": {"r": 1}}, TypeError, r"material\['ks'\]: expected 3 numbers, got dict"),
+    ({"ks": 0.1, "shininess": "high"}, TypeError, r"material\['shininess'\]: expected a number"),
+    ({"ks": [0.1, 0.2]}, ValueError, r"material\['ks'\]: expected 3 numbers, got 2"),
+    ({"ks": 0.1, "shininess": float("nan")}, ValueError, r"shininess.*finite"),
+    ({"ks": -1}, ValueError, r"ks must be finite and >= 0"),
+    ({"kss": 0.1}, ValueError, r"material: unknown key 'kss'"),
+    ({"model": 3}, TypeError, r"material\['model'\]: expected a string"),
+    ([1, 2], TypeError, r"material: expected a dict"),
+])
+def test_bad_material_dicts(material, error, pattern):
+    with pytest.raises(error, match=pattern):
+        iphong.estimate_normals(IMAGES, LIGHTS, material=material)
+
+
+def test_two_images_with_a_string_albedo():
+    with pytest.raises(TypeError, match=r"material\['kd'\]: expected 3 numbers, got str"):
+        iphong.estimate_normals(np.zeros((2, 4, 4, 3), np.float32), [[0, 0, 1], [0, 1, 1]],
+                                material={"kd": "red"})
+
+
+def test_height_to_mesh_with_zero_intrinsics():
+    height = np.zeros((4, 4), np.float32)
+    with pytest.raises(ValueError, match="intrinsics need finite fx, fy > 0"):
+        iphong.height_to_mesh(height, np.ones((4, 4), bool), intrinsics=(0, 0, 0, 0))
+    with pytest.raises(TypeError, match=r"intrinsics \(fx, fy, cx, cy\): expected 4 numbers"):
+        iphong.height_to_mesh(height, np.ones((4, 4), bool), intrinsics="wide")
+    with pytest.raises(ValueError, match="pixel size must be finite and > 0"):
+        iphong.normals_from_height(height, pixel_size=0)
+
+
+def test_render_refuses_what_would_not_fit_naming_the_knob():
+    scene = {"width": 65536, "height": 65536, "lights": [{"direction": [0, 0, 1]}],
+             "objects": [{"shape": "sphere"}]}
+    with pytest.raises(ValueError, match=r"needs [\d.]+ GB, more than the memory limit of [\d.]+ "
+                                         r"GB \(raise it with max_memory_gb=\)"):
+        iphong.render(scene)
+    small = dict(scene, width=64, height=64)
+    with pytest.raises(ValueError, match="2097152 triangles .* memory limit of 100 MB"):
+        iphong.render(dict(small, objects=[{"shape": "plane", "divisions": 1024}]),
+                      max_memory_gb=0.1)
+    assert iphong.render(small, max_memory_gb=1)["image"].shape == (64, 64, 3)
+
+
+@pytest.mark.parametrize("scene, error, pattern", [
+    ({"width": 4294967328, "lights": [{"direction": [0, 0, 1]}], "objects": [{"shape": "sphere"}]},
+     ValueError, r"scene: width: integer out of range"),
+    ({"lights": [{"direction": [0, 0, 1]}], "objects": [{"shape": "sphere",
+                                                         "material": {"shininess": "high"}}]},
+     ValueError, r"objects\[0\]\.material\.shininess: expected a number"),
+    ({"lights": [{"direction": [0, 0, 1]}], "objects": [{"shape": "sphere", "radius": float("inf")}]},
+     ValueError, r"scene: not JSON"),
+    (42, TypeError, r"scene: expected a dict or a path, got int"),
+])
+def test_bad_scenes(scene, error, pattern):
+    with pytest.raises(error, match=pattern):
+        iphong.render(scene)
+
+
+def test_load_dataset_errors(tmp_path):
+    with pytest.raises(ValueError, match="no such folder"):
+        iphong.load_dataset(tmp_path / "absent")
+    (tmp_path / "filenames.txt").write_text("001.png\n")
+    (tmp_path / "light_directions.txt").write_text("0 0 1\n")
+    with pytest.raises(ValueError, match=r"001\.png: no such file"):
+        iphong.load_dataset(tmp_path)
+    with pytest.raises(TypeError, match="directory: expected a path, got int"):
+        iphong.load_dataset(3)
+
+
+def test_shade_and_material_arguments():
+    with pytest.raises(TypeError, match="shininess: expected a number, got str"):
+        iphong.Material(0.1, 0.5, 0.2, "high")
+    with pytest.raises(TypeError, match="ambient: expected 3 numbers, got str"):
+        iphong.shade([0, 0, 1], [0, 0, 1], iphong.material("jade"),
+                     [iphong.DirectionalLight([0, 0, 1])], ambient="x")

@@ -1,0 +1,292 @@
+"""A corpus of bad inputs, one or more per class of issue 10: every one ends in exactly one line
+`iphong: error: FILE[:LINE]: ...` naming the file, the documented exit code, nothing written and
+nothing changed — never a crash, a hang, a traceback or a library's own lines.
+
+Datasets are made at test time from a rendered one and then broken; scenes are the small files in
+fixtures/bad/scenes.
+"""
+import json
+import os
+import resource
+import shutil
+import struct
+import zlib
+
+import numpy as np
+import pytest
+
+from cli import (
+    FIXTURES,
+    IPHONG,
+    assert_one_line_error,
+    binary_available,
+    run,
+    snapshot,
+    user_copy,
+)
+
+pytestmark = pytest.mark.skipif(not binary_available(), reason=f"no iphong binary at {IPHONG}")
+
+BAD_SCENES = FIXTURES / "bad" / "scenes"
+
+
+def png_header(width, height):
+    """A valid PNG signature and IHDR that declare width x height, then almost no data."""
+    def chunk(kind, data):
+        return (struct.pack(">I", len(data)) + kind + data
+                + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+    return (b"\x89PNG\r\n\x1a\n"
+            + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(b"\0" * 16)) + chunk(b"IEND", b""))
+
+
+def grey_png(width, height, value=255):
+    rows = b"".join(b"\0" + bytes([value]) * width for _ in range(height))
+    def chunk(kind, data):
+        return (struct.pack(">I", len(data)) + kind + data
+                + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+    return (b"\x89PNG\r\n\x1a\n"
+            + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+
+
+@pytest.fixture(scope="module")
+def rendered(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("bad") / "sphere"
+    code, _, err = run("render", FIXTURES / "scenes" / "photometric_sphere.json", "-o", folder,
+                       "--per-light", "--format", "png")
+    assert code == 0, err
+    return folder
+
+
+# Each case breaks a copy of the dataset `ds` and returns the command line, the exit code, a
+# pattern the one line must match and the file it must name (relative to the work folder).
+def short_light_file(ds):
+    lines = (ds / "light_directions.txt").read_text().splitlines()
+    (ds / "light_directions.txt").write_text("\n".join(lines[:11]) + "\n")
+    return 1, r"has 11 lines for 12 images", "ds/light_directions.txt"
+
+
+def nan_light(ds):
+    lines = (ds / "light_directions.txt").read_text().splitlines()
+    lines[2] = "nan 0 1"
+    (ds / "light_directions.txt").write_text("\n".join(lines) + "\n")
+    return 1, r":3: not a finite number", "ds/light_directions.txt:3"
+
+
+def huge_intensity(ds):
+    lines = ["1 1 1"] * 12
+    lines[1] = "1e308 1 1"
+    (ds / "light_intensities.txt").write_text("\n".join(lines) + "\n")
+    return 1, r"light intensities must be > 0 and at most 1e30", "ds/light_intensities.txt:2"
+
+
+def zero_direction(ds):
+    lines = (ds / "light_directions.txt").read_text().splitlines()
+    lines[4] = "0 0 0"
+    (ds / "light_directions.txt").write_text("\n".join(lines) + "\n")
+    return 1, r"zero light direction", "ds/light_directions.txt:5"
+
+
+def garbage_light_file(ds):
+    (ds / "light_directions.txt").write_bytes(bytes(range(256)) * 4)
+    return 1, r"expected 3 numbers|not a text file", "ds/light_directions.txt"
+
+
+def fifo_light_file(ds):
+    (ds / "light_intensities.txt").unlink()
+    os.mkfifo(ds / "light_intensities.txt")  # reading it would block forever
+    return 1, r"not a regular file", "ds/light_intensities.txt"
+
+
+def folder_as_light_file(ds):
+    (ds / "light_directions.txt").unlink()
+    (ds / "light_directions.txt").mkdir()
+    return 1, r"is a folder, not a file", "ds/light_directions.txt"
+
+
+def empty_filenames(ds):
+    (ds / "filenames.txt").write_text("\n\n")
+    return 1, r"lists no images", "ds/filenames.txt"
+
+
+def missing_filenames(ds):
+    (ds / "filenames.txt").unlink()
+    return 1, r"no such file", "ds/filenames.txt"
+
+
+def missing_image(ds):
+    (ds / "002.png").unlink()
+    return 1, r"no such file", "ds/002.png"
+
+
+def corrupt_png(ds):
+    data = (ds / "002.png").read_bytes()
+    (ds / "002.png").write_bytes(data[:60] + b"\0" * 40 + data[100:200])  # libpng complains aloud
+    return 1, r".", "ds/002.png"
+
+
+def forged_png_header(ds):
+    (ds / "003.png").write_bytes(png_header(100000, 100000))
+    return 1, r"declares 100000x100000 pixels but has only \d+ bytes: truncated or corrupt", \
+        "ds/003.png"
+
+
+def image_of_another_size(ds):
+    (ds / "004.png").write_bytes(grey_png(8, 8))
+    return 1, r"is 8x8, but mask\.png is 96x96", "ds/004.png"
+
+
+def small_mask(ds):
+    (ds / "mask.png").write_bytes(grey_png(20, 20))
+    return 1, r"mask\.png: is 20x20, the images are 96x96", "ds/mask.png"
+
+
+def truncated_ground_truth(ds):
+    data = (ds / "Normal_gt.mat").read_bytes()
+    (ds / "Normal_gt.mat").write_bytes(data[: len(data) // 2])
+    return 1, r"truncated", "ds/Normal_gt.mat"
+
+
+def zero_ground_truth(ds):
+    (ds / "Normal_gt.mat").unlink()
+    (ds / "normal.txt").write_text("0 0 0\n" * (96 * 96))
+    return 1, r"holds no normal \(all zeros\)", "ds/normal.txt"
+
+
+def bad_material(ds):
+    (ds / "material.json").write_text('{"model": "phong", "ks": [0.1, -0.2, 0.1]}')
+    return 1, r"material ks must be finite and >= 0", "ds/material.json"
+
+
+def overflowing_material(ds):
+    (ds / "material.json").write_text('{"model": "phong", "shininess": 1e400}')
+    return 1, r"parse error: number overflow", "ds/material.json"
+
+
+def encoding_not_a_string(ds):
+    meta = json.loads((ds / "render.json").read_text())
+    meta["encoding"] = 5
+    (ds / "render.json").write_text(json.dumps(meta))
+    return 1, r"render\.json: encoding: expected a string", "ds/render.json"
+
+
+def one_image_unknown_albedo(ds):
+    (ds / "filenames.txt").write_text("001.png\n")
+    for name in ("light_directions.txt", "light_intensities.txt"):
+        (ds / name).write_text((ds / name).read_text().splitlines()[0] + "\n")
+    (ds / "material.json").unlink()
+    return 1, r"with 1 image\(s\) the coefficients must be known", "ds/material.json"
+
+
+DATASET_CASES = [
+    short_light_file, nan_light, huge_intensity, zero_direction, garbage_light_file,
+    fifo_light_file, folder_as_light_file, empty_filenames, missing_filenames, missing_image,
+    corrupt_png, forged_png_header, image_of_another_size, small_mask, truncated_ground_truth,
+    zero_ground_truth, bad_material, overflowing_material, encoding_not_a_string,
+    one_image_unknown_albedo,
+]
+
+
+@pytest.mark.parametrize("case", DATASET_CASES, ids=lambda f: f.__name__)
+def test_bad_dataset(rendered, tmp_path, case):
+    ds = user_copy(rendered, tmp_path / "ds")
+    code, pattern, named = case(ds)
+    before = snapshot(tmp_path)
+    result = run("normals", "ds", "-o", "out", cwd=tmp_path, timeout=60)
+    assert_one_line_error(result[0], result[2], code, pattern, named)
+    assert snapshot(tmp_path) == before
+
+
+# Scenes: (file, exit code, pattern). plane_size_1e10 is not an error: it renders (it crashed).
+SCENE_CASES = [
+    ("cylinder_radius_1e19.json", 1, r"objects\[0\]: coordinates beyond 1e15 scene units"),
+    ("width_wraps_32bit.json", 1, r"width: integer out of range"),
+    ("fov_180.json", 1, r"camera\.fov_deg: expected a number in \(0, 180\)"),
+    ("size_65536.json", 3, r"rendering 65536x65536 .* needs [\d.]+ GB, more than the memory limit"),
+    ("ring_100000_lights.json", 3, r"100000 per-light images needs [\d.]+ GB"),
+    ("plane_divisions_8192.json", 3, r"a mesh of 134217728 triangles .* more than the memory limit"),
+    ("heightfield_resolution_1e10.json", 1, r"resolution\[0\]: integer out of range"),
+    ("shininess_1e400.json", 1, r"parse error: number overflow parsing '1e400'"),
+    ("key_with_newline.json", 1, r"unknown field 'name x'"),
+    ("nothing_visible.json", 1, r"nothing is visible"),
+    ("point_light_per_light.json", 1, r"light 1 is a point light"),
+    ("corrupt_mesh.json", 1, r"not_a_mesh\.ply: declares 1000000000 vertex and 1000000000 face"),
+    ("ks_is_a_string.json", 1, r"objects\[0\]\.material\.ks: expected 3 numbers"),
+    ("encoding_not_a_string.json", 1, r"output\.encoding: expected a string"),
+    ("syntax_error.json", 1, r"parse error at line 3, column \d+"),
+    ("binary_garbage.json", 1, r"parse error at line 1, column 1"),
+]
+
+
+@pytest.mark.parametrize("name, code, pattern", SCENE_CASES, ids=[c[0] for c in SCENE_CASES])
+def test_bad_scene(tmp_path, name, code, pattern):
+    before = snapshot(tmp_path)
+    result = run("render", BAD_SCENES / name, "-o", tmp_path / "out", "--per-light", timeout=60)
+    assert_one_line_error(result[0], result[2], code, pattern, name)
+    assert snapshot(tmp_path) == before
+
+
+def test_huge_plane_renders_instead_of_crashing(tmp_path):
+    code, _, err = run("render", BAD_SCENES / "plane_size_1e10.json", "-o", tmp_path / "out")
+    assert code == 0, err
+
+
+@pytest.fixture(scope="module")
+def small_height(tmp_path_factory):
+    """A 4x4 one-channel EXR (a height map), the wrong size and channel count for most inputs."""
+    folder = tmp_path_factory.mktemp("small")
+    code, _, err = run("integrate", FIXTURES / "integrate" / "back_facing_normals.png",
+                       "-o", folder / "int", "--allow-back-facing")
+    assert code == 0, err
+    return folder / "int" / "height.exr"
+
+
+@pytest.mark.parametrize("args, code, pattern", [
+    (["normals", "ds", "-o", "out", "--bogus"], 2, r"not expected: --bogus"),
+    (["normals"], 2, r"dataset is required"),
+    (["frobnicate"], 2, r"frobnicate: no such command"),
+    (["normals", "ds", "-o", "out", "--threads", "100000"], 2, r"--threads: Value 100000"),
+    (["normals", "ds", "-o", "out", "--max-memory", "-1"], 2, r"--max-memory"),
+    (["normals", "ds", "-o", "out", "--max-memory", "0.0001"], 3, r"more than the memory limit"),
+    (["normals", "nowhere", "-o", "out"], 1, r"nowhere: no such folder"),
+    (["normals", "ds/001.png", "-o", "out"], 1, r"ds/001\.png: is a file, not a folder"),
+    (["integrate", "ds", "-o", "out", "--intrinsics", "0,0,0,0"], 1, r"intrinsics"),
+    (["integrate", "ds/mask.png", "-o", "out"], 1, r"ds/mask\.png: a normal map needs 3 channels"),
+    (["integrate", "ds", "-o", "out", "--depth-prior", "small.exr", "--allow-back-facing"], 1,
+     r"small\.exr: is 4x4, the normal map is 96x96"),
+    (["eval", "small.exr", "ds"], 1, r"small\.exr: has 1 channel"),
+    (["eval", "ds/normals.exr", "ds", "--mask", "small_mask.png"], 1,
+     r"small_mask\.png: is 20x20, the normal maps are 96x96"),
+    (["render", "nowhere.json", "-o", "out"], 1, r"nowhere\.json: no such file"),
+])
+def test_bad_command_line(rendered, small_height, tmp_path, args, code, pattern):
+    user_copy(rendered, tmp_path / "ds")
+    (tmp_path / "small_mask.png").write_bytes(grey_png(20, 20))
+    shutil.copy(small_height, tmp_path / "small.exr")
+    before = snapshot(tmp_path)
+    result = run(*args, cwd=tmp_path, timeout=60)
+    assert_one_line_error(result[0], result[2], code, pattern)
+    assert snapshot(tmp_path) == before
+
+
+def test_many_threads_under_a_memory_limit_still_run(rendered, tmp_path):
+    """Threads that cannot start (8 MB stacks in a 3 GB address space) are not a crash: the run
+    goes on with those that did."""
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
+    code, _, err = run("normals", rendered, "-o", tmp_path / "out", "--threads", "1000",
+                       preexec_fn=limit)
+    assert code == 0, err
+
+
+def test_warnings_do_not_hide_errors_and_stdout_holds_the_report(rendered, tmp_path):
+    ds = user_copy(rendered, tmp_path / "ds")
+    lines = (ds / "light_directions.txt").read_text().splitlines()
+    lines[0] = " ".join(str(2 * float(v)) for v in lines[0].split())
+    (ds / "light_directions.txt").write_text("\n".join(lines) + "\n")
+    code, out, err = run("normals", ds, "-o", tmp_path / "out")
+    assert code == 0, err
+    assert err.splitlines() == [f"iphong: warning: {ds}/light_directions.txt:1: light direction "
+                                "has length 2; normalized"]
+    assert "Angular error against the ground truth" in out
