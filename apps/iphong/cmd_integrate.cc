@@ -62,25 +62,8 @@ NormalInput ReadNormalInput(const IntegrateCommandOptions& o) {
       in.normals = std::move(d.normal_gt);
       in.mask = std::move(d.mask);
     }
-  } else if (path.extension() == ".mat") {
-    in.normals = io::ReadNormalMat(o.normals, "Normal_gt");
   } else {
-    ImageF image = io::ReadImage(o.normals, memory);
-    if (image.channels < 3) throw std::runtime_error(o.normals + ": a normal map needs 3 channels");
-    const std::string ext = path.extension().string();
-    if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") {
-      // Pictures store (n + 1)/2 (ReadImage undoes no transfer curve, as a normal picture has
-      // none).
-      in.normals = io::NormalsFromPicture(image, o.convention == "directx", &in.mask);
-    } else {
-      if (image.channels != 3) {
-        ImageF rgb(image.width, image.height, 3);
-        for (std::size_t p = 0; p < image.pixel_count(); ++p)
-          for (int c = 0; c < 3; ++c) rgb.pixels[3 * p + c] = image.pixels[p * image.channels + c];
-        image = std::move(rgb);
-      }
-      in.normals = std::move(image);
-    }
+    in.normals = io::ReadNormalMap(o.normals, o.convention == "directx", &in.mask, memory);
   }
   if (!o.mask.empty()) {
     RequireFile(o.mask);

@@ -256,6 +256,7 @@ void RunNormals(const NormalsCommandOptions& o) {
 struct EvalOptions {
   std::string estimate, ground_truth, mask;
   std::string error_map;
+  std::string convention = "opengl";
   CommonOptions common;
 };
 
@@ -263,28 +264,10 @@ std::string SizeOf(const ImageF& image) {
   return std::to_string(image.width) + "x" + std::to_string(image.height);
 }
 
-// A normal map read for comparison: 3 channels (x, y, z) at least.
-ImageF ReadNormalMap(const std::string& path, const MemoryLimit& memory) {
-  ImageF image = std::filesystem::path(path).extension() == ".mat"
-                     ? io::ReadNormalMat(path, "Normal_gt")
-                     : io::ReadImage(path, memory);
-  if (image.channels < 3) {
-    throw std::runtime_error(path + ": has " + std::to_string(image.channels) +
-                             " channel(s); a normal map needs 3 (x, y, z)");
-  }
-  if (image.channels > 3) {
-    ImageF xyz(image.width, image.height, 3);
-    for (std::size_t p = 0; p < image.pixel_count(); ++p)
-      for (int c = 0; c < 3; ++c) xyz.pixels[3 * p + c] = image.pixels[p * image.channels + c];
-    image = std::move(xyz);
-  }
-  return image;
-}
-
 void RunEval(const EvalOptions& o) {
   RequireFile(o.estimate);
   const MemoryLimit memory = o.common.memory();
-  const ImageF estimate = ReadNormalMap(o.estimate, memory);
+  const ImageF estimate = io::ReadNormalMap(o.estimate, o.convention == "directx", nullptr, memory);
   ImageF truth;
   Mask mask;
   std::string truth_name = o.ground_truth;
@@ -301,7 +284,7 @@ void RunEval(const EvalOptions& o) {
     if (d.mask.width == truth.width && d.mask.height == truth.height) mask = d.mask;
   } else {
     RequireFile(o.ground_truth);
-    truth = ReadNormalMap(o.ground_truth, memory);
+    truth = io::ReadNormalMap(o.ground_truth, o.convention == "directx", nullptr, memory);
   }
   if (estimate.width != truth.width || estimate.height != truth.height) {
     throw std::runtime_error(o.estimate + ": is " + SizeOf(estimate) + ", the ground truth " +
@@ -391,6 +374,10 @@ void AddNormalsCommand(CLI::App& app) {
   eval->add_option("--error-map", e->error_map,
                    "Write the error picture (PNG) here (a new file, or --overwrite)");
   eval->add_flag("--overwrite", e->common.overwrite, "Replace an existing --error-map file");
+  eval->add_option("--normal-map-convention", e->convention,
+                   "Green axis of normal maps stored as pictures (PNG, JPEG)")
+      ->check(CLI::IsMember({"opengl", "directx"}))
+      ->capture_default_str();
   AddMemoryOption(eval, e->common);
   eval->callback([e] { RunEval(*e); });
 }

@@ -278,6 +278,7 @@ Dataset LoadDataset(const std::string& directory, const DatasetLoadOptions& opti
       Fail(mask_path, "is " + Size(d.mask.width, d.mask.height) + ", the images are " +
                           Size(width, height) + " (" + d.filenames[0] + ")");
     }
+    if (d.mask.count() == 0) Fail(mask_path, "selects no pixel (all zero; nonzero = object)");
   } else {
     d.mask = Mask(width, height, true);
   }

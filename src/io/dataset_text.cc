@@ -7,6 +7,7 @@
 
 #include "io/json_reader.h"
 #include "io/scene_file.h"
+#include "solve/photometric_data.h"
 
 namespace iphong::io {
 namespace {
@@ -113,6 +114,7 @@ std::vector<Vec3d> ParseLightDirections(const std::string& text, const std::stri
     }
     d = (d / scale).normalized();
   }
+  if (std::string m = solve::CheckLightSpan(directions); !m.empty()) Fail(source, m);
   return directions;
 }
 

@@ -1,11 +1,14 @@
 #include "io/visualize.h"
 
+#include <filesystem>
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cstdio>
 #include <stdexcept>
 
+#include "io/dataset.h"
 #include "io/image_io.h"
 
 namespace iphong::io {
@@ -38,6 +41,27 @@ ImageF NormalsFromPicture(const ImageF& picture, bool directx, Mask* mask) {
     mask->inside[p] = 1;
   }
   return normals;
+}
+
+ImageF ReadNormalMap(const std::string& path, bool directx, Mask* mask, const MemoryLimit& memory) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".mat") return ReadNormalMat(path, "Normal_gt");
+  ImageF image = ReadImage(path, memory);
+  if (image.channels < 3) {
+    throw std::runtime_error(path + ": has " + std::to_string(image.channels) +
+                             " channel(s); a normal map needs 3 (x, y, z)");
+  }
+  if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tga" || ext == ".bmp") {
+    // Pictures store (n + 1)/2; ReadImage undoes no transfer curve, and a normal picture has none.
+    Mask ignored;
+    return NormalsFromPicture(image, directx, mask ? mask : &ignored);
+  }
+  if (image.channels == 3) return image;
+  ImageF xyz(image.width, image.height, 3);
+  for (std::size_t p = 0; p < image.pixel_count(); ++p)
+    for (int c = 0; c < 3; ++c) xyz.pixels[3 * p + c] = image.pixels[p * image.channels + c];
+  return xyz;
 }
 
 void WriteErrorMap(const std::string& path, const ImageF& error_deg, const Mask& mask,

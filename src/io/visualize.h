@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "core/resources.h"
 #include "core/types.h"
 
 namespace iphong::io {
@@ -14,6 +15,13 @@ ImageF NormalMapPicture(const ImageF& normals, const Mask& mask, bool directx = 
 // The inverse, for normal maps stored as pictures: unit vectors from 2v − 1 (renormalized);
 // black pixels (the outside of NormalMapPicture's mask) are left out of `mask` and set to 0.
 ImageF NormalsFromPicture(const ImageF& picture, bool directx, Mask* mask);
+
+// A normal-map file in any of the forms people keep them: float images (EXR, float TIFF: raw
+// xyz), pictures (PNG, JPEG, TGA, BMP: (n + 1)/2, OpenGL convention unless `directx`; `mask` gets
+// the pixels that are not black) or a MATLAB file (Normal_gt). Always 3 channels. Throws
+// std::runtime_error naming the file ("needs 3 channels (x, y, z)").
+ImageF ReadNormalMap(const std::string& path, bool directx, Mask* mask,
+                     const MemoryLimit& memory = {});
 
 // Angular error (degrees, 1 channel) as a colour map from 0 to `max_deg` with a labelled scale
 // bar on the right; black outside the mask. Written as an 8-bit PNG (atomically).

@@ -307,18 +307,29 @@ double EstimateRenderBytes(const Scene& scene, const RenderOptions& options, boo
   return samples * (60 + 12 * images) + pixels * (36 + 12 * images) + 4 * shadow_texels;
 }
 
+namespace {
+
+// "rendering 64x64 with 2x2 supersampling and 12 per-light images with 12 2048x2048 shadow maps"
+std::string DescribeRender(const Scene& scene, const RenderOptions& options, bool per_light) {
+  auto square = [](int n) { return std::to_string(n) + "x" + std::to_string(n); };
+  const std::string lights = std::to_string(scene.lighting.lights.size());
+  std::string text =
+      "rendering " + std::to_string(scene.camera.width) + "x" + std::to_string(scene.camera.height);
+  if (options.supersampling > 1)
+    text += " with " + square(options.supersampling) + " supersampling";
+  if (per_light) text += " and " + lights + " per-light images";
+  if (options.shadows)
+    text += " with " + lights + " " + square(options.shadow_map_size) + " shadow maps";
+  return text;
+}
+
+}  // namespace
+
 RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_light) {
   Require(scene.Validate());
   Require(options.Validate());
-  RequireMemory(
-      options.memory, EstimateRenderBytes(scene, options, per_light),
-      "rendering " + std::to_string(scene.camera.width) + "x" +
-          std::to_string(scene.camera.height) +
-          (options.supersampling > 1 ? " with " + std::to_string(options.supersampling) + "x" +
-                                           std::to_string(options.supersampling) + " supersampling"
-                                     : std::string()) +
-          (per_light ? " and " + std::to_string(scene.lighting.lights.size()) + " per-light images"
-                     : std::string()));
+  RequireMemory(options.memory, EstimateRenderBytes(scene, options, per_light),
+                DescribeRender(scene, options, per_light));
   const int s = options.supersampling;
   Camera camera = scene.camera;
   camera.width *= s;

@@ -1,9 +1,26 @@
 #include "solve/photometric_data.h"
 
+#include <Eigen/Eigenvalues>
+
 #include <cmath>
 #include <stdexcept>
 
 namespace iphong::solve {
+
+std::string CheckLightSpan(const std::vector<Vec3d>& light_directions) {
+  if (light_directions.size() < 3) return "";
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const Vec3d& l : light_directions) scatter += l * l.transpose();
+  const Eigen::Vector3d spread =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvalues();  // ascending
+  // The smallest over the largest: 1e-6 is a spread of 0.1% of a radian out of the plane.
+  if (!(spread[0] > 1e-6 * spread[2])) {
+    return "the " + std::to_string(light_directions.size()) +
+           " light directions lie in one plane (or are all the same): the normal is not "
+           "determined; photometric stereo needs three lights that are not coplanar";
+  }
+  return "";
+}
 
 std::string PhotometricData::Validate() const {
   if (images < 1) return "photometric stereo needs at least one image";
@@ -21,7 +38,7 @@ std::string PhotometricData::Validate() const {
     }
   }
   if (values.size() != pixels.size() * images * 3) return "observation array has the wrong size";
-  return "";
+  return CheckLightSpan(light_directions);
 }
 
 PhotometricData ObservationLayout(int width, int height, const Mask& mask,

@@ -27,6 +27,11 @@ struct PhotometricData {
   std::string Validate() const;
 };
 
+// "" when three or more light directions span all three dimensions, else what is wrong: with all
+// lights in one plane through the surface (or all the same) the normal's component across that
+// plane is not determined by any pixel's shading. One or two lights are left to the global solver.
+std::string CheckLightSpan(const std::vector<Vec3d>& light_directions);
+
 // The observations' layout for K images: the masked pixels and the lights, values zeroed.
 // Throws std::invalid_argument when the mask is not width×height.
 PhotometricData ObservationLayout(int width, int height, const Mask& mask,

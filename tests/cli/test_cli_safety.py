@@ -15,6 +15,7 @@ import time
 import pytest
 
 from cli import (
+    FIXTURES,
     IPHONG,
     PARTIAL,
     assert_one_line_error,
@@ -82,7 +83,7 @@ def test_normals_output_over_its_input_is_refused(capture, tmp_path, target, pat
 def test_render_into_the_scene_folder_is_refused(tmp_path):
     scene = tmp_path / "scene"
     scene.mkdir()
-    shutil.copy(IPHONG.parents[1] / "fixtures/scenes/issue3_sphere.json", scene / "scene.json")
+    shutil.copy(FIXTURES / "scenes/issue3_sphere.json", scene / "scene.json")
     before = snapshot(tmp_path)
     code, _, err = run("render", "scene.json", "-o", ".", cwd=scene)
     assert_one_line_error(code, err, 4, r"\.: contains the input scene\.json")
@@ -195,7 +196,7 @@ def test_another_commands_output_is_refused(capture, tmp_path):
     assert snapshot(tmp_path) == before
 
 
-PHOTOMETRIC = IPHONG.parents[1] / "fixtures/scenes/photometric_sphere.json"
+PHOTOMETRIC = FIXTURES / "scenes/photometric_sphere.json"
 
 
 def test_error_map_is_a_new_file_unless_overwrite(capture, tmp_path):
@@ -327,11 +328,22 @@ def start(*args):
                             stderr=subprocess.PIPE, text=True)
 
 
+def wait_for_staging(folder, process, timeout=30):
+    """Waits until the run has started writing (its staging folder exists in `folder`): a signal
+    before main() (the libraries' start-up takes ~0.4 s) would only test the default handler."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and process.poll() is None:
+        if any(PARTIAL.search(name) for name in os.listdir(folder)):
+            return
+        time.sleep(0.01)
+
+
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_interrupt_removes_the_unfinished_output(slow_dataset, tmp_path, sig):
     before = snapshot(tmp_path)
     process = start("normals", slow_dataset, "-o", tmp_path / "out")
-    time.sleep(0.4)
+    wait_for_staging(tmp_path, process)
+    time.sleep(0.1)
     process.send_signal(sig)
     _, err = process.communicate(timeout=60)
     if process.returncode == 0:
@@ -347,7 +359,8 @@ def test_interrupt_during_overwrite_keeps_the_old_output(slow_dataset, tmp_path)
     assert code == 0, err
     before = snapshot(tmp_path)
     process = start("normals", slow_dataset, "-o", out, "--overwrite")
-    time.sleep(0.4)
+    wait_for_staging(out, process)
+    time.sleep(0.1)
     process.send_signal(signal.SIGINT)
     process.communicate(timeout=60)
     if process.returncode == 0:
