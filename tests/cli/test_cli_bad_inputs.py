@@ -6,6 +6,7 @@ Datasets are made at test time from a rendered one and then broken; scenes are t
 fixtures/bad/scenes.
 """
 import json
+import math
 import os
 import resource
 import shutil
@@ -27,6 +28,14 @@ from cli import (
 pytestmark = pytest.mark.skipif(not binary_available(), reason=f"no iphong binary at {IPHONG}")
 
 BAD_SCENES = FIXTURES / "bad" / "scenes"
+
+
+def np_cos(step):
+    return math.cos(0.2 + 0.1 * step)
+
+
+def np_sin(step):
+    return math.sin(0.2 + 0.1 * step)
 
 
 def png_header(width, height):
@@ -102,6 +111,17 @@ def folder_as_light_file(ds):
     (ds / "light_directions.txt").unlink()
     (ds / "light_directions.txt").mkdir()
     return 1, r"is a folder, not a file", "ds/light_directions.txt"
+
+
+def coplanar_lights(ds):
+    (ds / "light_directions.txt").write_text("".join(f"{np_cos(a)} 0 {np_sin(a)}\n"
+                                                     for a in range(12)))
+    return 1, r"the 12 light directions lie in one plane", "ds/light_directions.txt"
+
+
+def black_mask(ds):
+    (ds / "mask.png").write_bytes(grey_png(96, 96, 0))
+    return 1, r"selects no pixel", "ds/mask.png"
 
 
 def empty_filenames(ds):
@@ -180,6 +200,7 @@ def one_image_unknown_albedo(ds):
 
 DATASET_CASES = [
     short_light_file, nan_light, huge_intensity, zero_direction, garbage_light_file,
+    coplanar_lights, black_mask,
     fifo_light_file, folder_as_light_file, empty_filenames, missing_filenames, missing_image,
     corrupt_png, forged_png_header, image_of_another_size, small_mask, truncated_ground_truth,
     zero_ground_truth, bad_material, overflowing_material, encoding_not_a_string,

@@ -87,3 +87,9 @@ def test_shade_and_material_arguments():
     with pytest.raises(TypeError, match="ambient: expected 3 numbers, got str"):
         iphong.shade([0, 0, 1], [0, 0, 1], iphong.material("jade"),
                      [iphong.DirectionalLight([0, 0, 1])], ambient="x")
+
+
+def test_coplanar_lights_are_an_error():
+    lights = [[np.cos(a), 0, np.sin(a)] for a in (0.3, 0.6, 0.9, 1.2)]
+    with pytest.raises(ValueError, match="lie in one plane"):
+        iphong.estimate_normals(np.ones((4, 4, 4, 3), np.float32), lights)
