@@ -67,8 +67,14 @@ def rendered(tmp_path_factory):
     return folder
 
 
-# Each case breaks a copy of the dataset `ds` and returns the command line, the exit code, a
-# pattern the one line must match and the file it must name (relative to the work folder).
+def replace_line(path, index, text):
+    lines = path.read_text().splitlines()
+    lines[index] = text
+    path.write_text("\n".join(lines) + "\n")
+
+
+# Each case breaks a copy of the dataset `ds` and returns the exit code, a pattern the one line
+# must match and the file it must name (relative to the work folder).
 def short_light_file(ds):
     lines = (ds / "light_directions.txt").read_text().splitlines()
     (ds / "light_directions.txt").write_text("\n".join(lines[:11]) + "\n")
@@ -76,23 +82,17 @@ def short_light_file(ds):
 
 
 def nan_light(ds):
-    lines = (ds / "light_directions.txt").read_text().splitlines()
-    lines[2] = "nan 0 1"
-    (ds / "light_directions.txt").write_text("\n".join(lines) + "\n")
+    replace_line(ds / "light_directions.txt", 2, "nan 0 1")
     return 1, r":3: not a finite number", "ds/light_directions.txt:3"
 
 
 def huge_intensity(ds):
-    lines = ["1 1 1"] * 12
-    lines[1] = "1e308 1 1"
-    (ds / "light_intensities.txt").write_text("\n".join(lines) + "\n")
+    replace_line(ds / "light_intensities.txt", 1, "1e308 1 1")
     return 1, r"light intensities must be > 0 and at most 1e30", "ds/light_intensities.txt:2"
 
 
 def zero_direction(ds):
-    lines = (ds / "light_directions.txt").read_text().splitlines()
-    lines[4] = "0 0 0"
-    (ds / "light_directions.txt").write_text("\n".join(lines) + "\n")
+    replace_line(ds / "light_directions.txt", 4, "0 0 0")
     return 1, r"zero light direction", "ds/light_directions.txt:5"
 
 

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "error_of.h"
 #include "core/errors.h"
 #include "io/files.h"
 #include "io/output_folder.h"
@@ -52,14 +53,7 @@ class OutputFolderTest : public ::testing::Test {
   fs::path dir_;
 };
 
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using test::ErrorOf;
 
 TEST_F(OutputFolderTest, NewFolderAppearsWholeWithItsManifest) {
   Produce(Path("a/b/out"), "render", {{"x.txt", "1"}, {"sub/y.txt", "22"}});

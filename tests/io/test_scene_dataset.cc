@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "error_of.h"
 #include "geometry/primitives.h"
 #include "io/dataset.h"
 #include "io/files.h"
@@ -34,14 +35,7 @@ class TempDir : public ::testing::Test {
   fs::path dir_;
 };
 
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using test::ErrorOf;
 
 // A render output, as `iphong render` commits it.
 void WriteDataset(const std::string& dir, const SceneFile& f, const render::RenderOutput& out,
