@@ -8,10 +8,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <nlohmann/json.hpp>
-#include <regex>
 
 #include "core/errors.h"
 #include "core/version.h"
@@ -52,6 +52,25 @@ void Unregister(const void* key) {
 std::string PartialSuffix() {
   static std::atomic<int> counter{0};
   return std::to_string(::getpid()) + "-" + std::to_string(counter++);
+}
+
+// The end of "PID-N" starting at `at` (digits, '-', digits), or npos.
+std::size_t StagingSuffixEnd(const std::string& text, std::size_t at) {
+  auto digits = [&](std::size_t i) {
+    const std::size_t start = i;
+    while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) ++i;
+    return i > start ? i : std::string::npos;
+  };
+  const std::size_t dash = digits(at);
+  if (dash == std::string::npos || dash >= text.size() || text[dash] != '-')
+    return std::string::npos;
+  return digits(dash + 1);
+}
+
+// The names iphong stages under: ".iphong-partial-PID-N" inside a folder.
+bool IsStagingName(const std::string& name) {
+  const std::size_t prefix = std::strlen(kPartial);
+  return name.rfind(kPartial, 0) == 0 && StagingSuffixEnd(name, prefix) == name.size();
 }
 
 // The pid a partial name was made by (".iphong-partial-PID-N", ".NAME.iphong-partial-PID-N").
@@ -190,7 +209,7 @@ void RecoverLocked(const fs::path& folder) {
   }
   for (fs::directory_iterator it(folder, error), end; !error && it != end; it.increment(error)) {
     const std::string name = it->path().filename().string();
-    if (name.rfind(kPartial, 0) == 0 || name.rfind(std::string(kJournal) + ".", 0) == 0) {
+    if (IsStagingName(name) || name.rfind(std::string(kJournal) + kPartial, 0) == 0) {
       std::error_code ignored;
       fs::remove_all(it->path(), ignored);  // we hold the lock: nobody is writing there
     }
@@ -471,7 +490,7 @@ void OutputFolder::CommitInPlace(const std::map<std::string, ManifestEntry>& wri
   journal["move"] = names_;
   journal["move"].push_back(kManifest);  // last: until it moves, the old manifest holds
   journal["remove"] = remove;
-  const fs::path temp = target_ / (std::string(kJournal) + "." + PartialSuffix());
+  const fs::path temp = target_ / (std::string(kJournal) + kPartial + PartialSuffix());
   WriteFileVerified(temp.string(), journal.dump(1) + "\n");
   if (::rename(temp.c_str(), (target_ / kJournal).c_str()) != 0) {
     const int e = errno;
@@ -479,13 +498,16 @@ void OutputFolder::CommitInPlace(const std::map<std::string, ManifestEntry>& wri
     Refuse(target_display_ + ": cannot write the commit journal: " + std::strerror(e));
   }
   SyncFolder(target_.string());  // the commit point: from here on the new state wins
+  journaled_ = true;             // the staging folder now belongs to the journal
   ApplyJournal(target_, journal);
   staging_.clear();
 }
 
 void OutputFolder::RemoveStaging() {
   std::error_code ignored;
-  if (!staging_.empty()) fs::remove_all(staging_, ignored);
+  // After the journal, what is staged is the new state: a failed or interrupted commit is
+  // finished from it by the next run, so it stays.
+  if (!staging_.empty() && !journaled_) fs::remove_all(staging_, ignored);
   staging_.clear();
   for (auto it = created_parents_.rbegin(); it != created_parents_.rend(); ++it) {
     if (::rmdir(it->c_str()) != 0) break;
@@ -501,11 +523,26 @@ void OutputFolder::Abandon() {
 }
 
 std::string WithoutStagingNames(const std::string& message) {
-  // ".NAME.iphong-partial-PID-N" (a new folder staged beside it) -> "NAME";
-  // ".iphong-partial-PID-N/" (staged inside the folder) -> "".
-  static const std::regex beside(R"(\.([^/ ]+)\.iphong-partial-[0-9]+-[0-9]+)");
-  static const std::regex inside(R"(/\.iphong-partial-[0-9]+-[0-9]+/)");
-  return std::regex_replace(std::regex_replace(message, beside, "$1"), inside, "/");
+  // In each path component: ".NAME.iphong-partial-PID-N" (a new folder staged beside it) becomes
+  // "NAME"; ".iphong-partial-PID-N/" (staged inside the folder) goes.
+  std::string text = message;
+  for (std::size_t at = text.find(kPartial); at != std::string::npos;
+       at = text.find(kPartial, at + 1)) {
+    const std::size_t end = StagingSuffixEnd(text, at + std::strlen(kPartial));
+    if (end == std::string::npos) continue;
+    const std::size_t slash = text.rfind('/', at);
+    const std::size_t start = slash == std::string::npos ? 0 : slash + 1;
+    if (start == at && end < text.size() && text[end] == '/') {
+      text.erase(at, end + 1 - at);
+      at = start;
+    } else if (start < at && text[start] == '.' &&
+               text.find(' ', start) > at) {  // one component: no space between
+      text.erase(at, end - at);
+      text.erase(start, 1);
+      at = start;
+    }
+  }
+  return text;
 }
 
 void AbandonOutputFolders() {

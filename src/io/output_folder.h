@@ -79,6 +79,7 @@ class OutputFolder {
   std::map<std::string, std::map<std::string, ManifestEntry>> manifest_;  // command -> files
   std::shared_ptr<std::mutex> mutex_;  // held by Commit and by AbandonOutputFolders
   bool committed_ = false, abandoned_ = false;
+  bool journaled_ = false;  // the commit journal is written: the staging folder must stay
 };
 
 // Removes the staging folders (and partial single files) of every output not yet committed, and
