@@ -127,6 +127,9 @@ void RunIntegrate(IntegrateCommandOptions& o) {
       std::fprintf(Err(), "\rintegrating: %3.0f%%", 100 * fraction);
     };
   }
+  RequireMemory(
+      o.common.memory(), io::EstimateSurfaceBytes(in.mask.count(), options),
+      o.normals + ": integrating and meshing " + std::to_string(in.mask.count()) + " pixels");
   integrate::IntegrateResult result;
   try {
     result = integrate::IntegrateNormals(in.normals, in.mask, options);

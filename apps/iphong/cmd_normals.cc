@@ -181,6 +181,9 @@ void RunNormals(const NormalsCommandOptions& o) {
     integrate::IntegrateOptions integration;
     integration.allow_back_facing = true;
     integration.threads = o.common.threads;
+    RequireMemory(
+        o.common.memory(), io::EstimateSurfaceBytes(with_normal.count(), integration),
+        o.dataset + ": integrating and meshing " + std::to_string(with_normal.count()) + " pixels");
     heights = integrate::IntegrateNormals(result.normals, with_normal, integration);
     io::SurfaceFileOptions files;
     files.albedo = &result.albedo;

@@ -12,6 +12,11 @@
 
 namespace iphong::io {
 
+double EstimateSurfaceBytes(std::size_t pixels, const integrate::IntegrateOptions& options) {
+  const bool cholesky = options.solver == integrate::LinearSolver::kCholesky;
+  return static_cast<double>(pixels) * (cholesky ? 1100.0 : 700.0);
+}
+
 geometry::HeightMapFrame FrameOf(const integrate::IntegrateOptions& options) {
   geometry::HeightMapFrame frame;
   frame.pixel_size = options.pixel_size;
