@@ -19,7 +19,8 @@ namespace {
 // Non-blank lines with their numbers; "\r\n" endings accepted.
 std::vector<std::pair<int, std::string>> Lines(const std::string& text) {
   std::vector<std::pair<int, std::string>> lines;
-  std::size_t start = 0;
+  // Editors on Windows start UTF-8 files with a byte-order mark; it is not part of line 1.
+  std::size_t start = text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0;
   for (int number = 1; start <= text.size(); ++number) {
     std::size_t end = text.find('\n', start);
     if (end == std::string::npos) end = text.size();

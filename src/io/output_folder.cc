@@ -262,6 +262,9 @@ void OutputFolder::Prepare(const std::string& target) {
   std::error_code error;
   const fs::file_status status = fs::status(target_, error);
   target_existed_ = fs::exists(status);
+  if (!target_existed_ && fs::exists(fs::symlink_status(target_, error))) {
+    Refuse(target + ": is a symbolic link that leads nowhere (or in a loop); choose a folder");
+  }
   if (target_existed_ && !fs::is_directory(status)) {
     Refuse(target + ": exists and is not a folder; choose a folder for the output");
   }
