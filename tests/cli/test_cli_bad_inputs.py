@@ -310,3 +310,14 @@ def test_warnings_do_not_hide_errors_and_stdout_holds_the_report(rendered, tmp_p
     assert err.splitlines() == [f"iphong: warning: {ds}/light_directions.txt:1: light direction "
                                 "has length 2; normalized"]
     assert "Angular error against the ground truth" in out
+
+
+def test_text_files_from_windows_editors_are_read(rendered, tmp_path):
+    """A UTF-8 byte-order mark and CRLF line ends are what Notepad writes: not an error."""
+    ds = user_copy(rendered, tmp_path / "ds")
+    for name in ("filenames.txt", "light_directions.txt", "light_intensities.txt"):
+        text = (ds / name).read_text().replace("\n", "\r\n")
+        (ds / name).write_bytes(b"\xef\xbb\xbf" + text.encode())
+    code, out, err = run("normals", ds, "-o", tmp_path / "out")
+    assert code == 0, err
+    assert "mean 0.00 deg" in out

@@ -122,6 +122,18 @@ def test_output_over_a_file_is_refused(capture, tmp_path):
     assert snapshot(tmp_path) == before
 
 
+def test_a_dangling_or_looping_symlink_is_not_replaced(capture, tmp_path):
+    os.symlink(tmp_path / "nowhere", tmp_path / "dangling")
+    os.symlink("loop-b", tmp_path / "loop-a")
+    os.symlink("loop-a", tmp_path / "loop-b")
+    before = snapshot(tmp_path)
+    for link in ("dangling", "loop-a"):
+        code, _, err = run("normals", capture, "-o", tmp_path / link)
+        assert_one_line_error(code, err, 4, r"is a symbolic link that leads nowhere")
+    assert snapshot(tmp_path) == before
+    assert os.readlink(tmp_path / "dangling") == str(tmp_path / "nowhere")
+
+
 def test_a_folder_iphong_did_not_write_is_refused(capture, tmp_path):
     (tmp_path / "mine").mkdir()
     (tmp_path / "mine" / "normals.exr").write_text("my own file")
