@@ -290,6 +290,8 @@ def test_bad_command_line(rendered, small_height, tmp_path, args, code, pattern)
     assert snapshot(tmp_path) == before
 
 
+@pytest.mark.skipif("ASAN_OPTIONS" in os.environ,
+                    reason="AddressSanitizer's shadow memory does not fit in the 3 GB limit")
 def test_many_threads_under_a_memory_limit_still_run(rendered, tmp_path):
     """Threads that cannot start (8 MB stacks in a 3 GB address space) are not a crash: the run
     goes on with those that did."""
