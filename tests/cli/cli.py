@@ -1,4 +1,9 @@
-"""Running the iphong command line from tests: the binary, snapshots of folders, one-line errors."""
+"""Running the iphong command line from tests: the binary, snapshots of folders, one-line errors.
+
+The command-line tests need only the binary ($IPHONG_BUILD_DIR/iphong, default build/iphong), not
+the Python module, so they also run against a sanitizer build (scripts/sanitize.sh). pytest puts
+this folder on the path (no conftest here: it would shadow tests/python's), so tests import it
+as `cli`."""
 import hashlib
 import os
 import pathlib
