@@ -173,16 +173,12 @@ class BandRasterizer {
     const double width = right.x - left.x;
     if (!(width > 0) || !std::isfinite(width)) return;  // also NaN and overflowed edges
     // Clamped to the image in double before the cast, so far-off spans cannot overflow an int.
-    const int c0 = static_cast<int>(std::ceil(std::clamp(left.x - 0.5, -1.0, out_.width + 1.0)));
-    const int c1 =
-        static_cast<int>(std::ceil(std::clamp(right.x - 0.5, -1.0, out_.width + 1.0))) - 1;
-    if (std::max(c0, 0) > std::min(c1, out_.width - 1)) return;
-    return FillClampedSpan(row, ref, left, right, width, std::max(c0, 0),
-                           std::min(c1, out_.width - 1));
-  }
-
-  void FillClampedSpan(int row, const TriangleRef& ref, const Edge& left, const Edge& right,
-                       double width, int c0, int c1) {
+    const int c0 =
+        std::max(0, static_cast<int>(std::ceil(std::clamp(left.x - 0.5, -1.0, out_.width + 1.0))));
+    const int c1 = std::min(
+        out_.width - 1,
+        static_cast<int>(std::ceil(std::clamp(right.x - 0.5, -1.0, out_.width + 1.0))) - 1);
+    if (c0 > c1) return;
     const int n = layout_.count;
     Attrs a, da;
     const double t = c0 + 0.5 - left.x;
