@@ -1,13 +1,15 @@
-// What went wrong, by kind, so the command line can choose its exit code and Python its exception
-// (README, "Command line"):
-//   std::runtime_error / std::invalid_argument  bad input: a file or value is wrong   exit 1,
-//   ValueError ResourceError                               the request exceeds the memory limit
-//   exit 3, ValueError OutputError                                 the output cannot be written
-//   exit 4, OSError
+// What went wrong, by kind, so the command line can choose its exit code and Python its
+// exception (README, "Command line"):
+//
+//   std::runtime_error, invalid_argument   bad input (a file or value)    exit 1, ValueError
+//   ResourceError                          over the memory limit          exit 3, ValueError
+//   OutputError                            the output cannot be written   exit 4, OSError
+//
 // Every message is one line that starts with the file (and line, or field) it is about.
 #pragma once
 
 #include <stdexcept>
+#include <string>
 
 namespace iphong {
 
@@ -18,12 +20,6 @@ struct ResourceError : std::runtime_error {
 struct OutputError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
-
-}  // namespace iphong
-
-#include <string>
-
-namespace iphong {
 
 // Messages from libraries may span lines (OpenImageIO's do) and may quote bytes of a broken
 // input; iphong prints one line of valid UTF-8 per error: control characters become spaces,

@@ -3,8 +3,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <cmath>
-
 namespace iphong::geometry {
 
 std::string HeightMapFrame::Validate() const {
