@@ -5,7 +5,6 @@
 
 #include "integrate/integrate.h"
 #include "io/dataset.h"
-#include "io/files.h"
 #include "io/image_io.h"
 #include "io/output_folder.h"
 #include "io/surface.h"
@@ -32,10 +31,6 @@ struct NormalInput {
   Mask mask;
   ImageF albedo;
 };
-
-std::string SizeOf(int width, int height) {
-  return std::to_string(width) + "x" + std::to_string(height);
-}
 
 // A normal map file (EXR/TIFF floats, PNG pictures, Normal_gt.mat), the output directory of
 // `iphong normals` (normals.exr, albedo.exr) or a dataset directory (its ground truth and mask).
@@ -66,7 +61,6 @@ NormalInput ReadNormalInput(const IntegrateCommandOptions& o) {
     in.normals = io::ReadNormalMap(o.normals, o.convention == "directx", &in.mask, memory);
   }
   if (!o.mask.empty()) {
-    RequireFile(o.mask);
     in.mask = io::ReadMask(o.mask, memory);
   } else if (in.mask.width == 0) {
     in.mask = NonZeroPixels(in.normals);
@@ -74,7 +68,6 @@ NormalInput ReadNormalInput(const IntegrateCommandOptions& o) {
     in.mask = NonZeroPixels(in.normals, &in.mask);  // dataset masks include pixels GT leaves 0
   }
   if (!o.albedo.empty()) {
-    RequireFile(o.albedo);
     in.albedo = io::ReadImage(o.albedo, memory);
   }
   if (!in.albedo.pixels.empty() &&
@@ -109,16 +102,16 @@ void RunIntegrate(IntegrateCommandOptions& o) {
   io::OutputFolder out(o.output_dir, folder);
   const NormalInput in = ReadNormalInput(o);
   if (!o.depth_prior.empty()) {
-    RequireFile(o.depth_prior);
     options.depth_prior = io::ReadImage(o.depth_prior, o.common.memory());
     if (options.depth_prior.channels != 1) {
       throw std::runtime_error(o.depth_prior + ": the depth prior must have one channel");
     }
     if (options.depth_prior.width != in.normals.width ||
         options.depth_prior.height != in.normals.height) {
-      throw std::runtime_error(
-          o.depth_prior + ": is " + SizeOf(options.depth_prior.width, options.depth_prior.height) +
-          ", the normal map is " + SizeOf(in.normals.width, in.normals.height));
+      throw std::runtime_error(o.depth_prior + ": is " +
+                               SizeText(options.depth_prior.width, options.depth_prior.height) +
+                               ", the normal map is " +
+                               SizeText(in.normals.width, in.normals.height));
     }
   }
   const bool tty = ErrIsTerminal();

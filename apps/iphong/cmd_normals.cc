@@ -263,12 +263,7 @@ struct EvalOptions {
   CommonOptions common;
 };
 
-std::string SizeOf(const ImageF& image) {
-  return std::to_string(image.width) + "x" + std::to_string(image.height);
-}
-
 void RunEval(const EvalOptions& o) {
-  RequireFile(o.estimate);
   const MemoryLimit memory = o.common.memory();
   const ImageF estimate = io::ReadNormalMap(o.estimate, o.convention == "directx", nullptr, memory);
   ImageF truth;
@@ -286,21 +281,19 @@ void RunEval(const EvalOptions& o) {
     truth_name = o.ground_truth + "/Normal_gt.mat";
     if (d.mask.width == truth.width && d.mask.height == truth.height) mask = d.mask;
   } else {
-    RequireFile(o.ground_truth);
     truth = io::ReadNormalMap(o.ground_truth, o.convention == "directx", nullptr, memory);
   }
   if (estimate.width != truth.width || estimate.height != truth.height) {
-    throw std::runtime_error(o.estimate + ": is " + SizeOf(estimate) + ", the ground truth " +
-                             truth_name + " is " + SizeOf(truth));
+    throw std::runtime_error(o.estimate + ": is " + SizeText(estimate.width, estimate.height) +
+                             ", the ground truth " + truth_name + " is " +
+                             SizeText(truth.width, truth.height));
   }
   if (mask.width == 0) mask = Mask(truth.width, truth.height, true);
   if (!o.mask.empty()) {
-    RequireFile(o.mask);
     mask = io::ReadMask(o.mask, memory);
     if (mask.width != truth.width || mask.height != truth.height) {
-      throw std::runtime_error(o.mask + ": is " + std::to_string(mask.width) + "x" +
-                               std::to_string(mask.height) + ", the normal maps are " +
-                               SizeOf(truth));
+      throw std::runtime_error(o.mask + ": is " + SizeText(mask.width, mask.height) +
+                               ", the normal maps are " + SizeText(truth.width, truth.height));
     }
   }
   const solve::AngularErrorMetrics m = solve::CompareNormals(estimate, truth, mask);

@@ -5,7 +5,6 @@
 
 #include "core/errors.h"
 #include "io/dataset.h"
-#include "io/files.h"
 #include "io/output_folder.h"
 #include "io/scene_file.h"
 #include "iphong/commands.h"
@@ -25,7 +24,6 @@ struct RenderCommandOptions {
 };
 
 void RunRender(const RenderCommandOptions& o) {
-  RequireFile(o.scene_path);
   io::SceneFile file = io::LoadSceneFile(o.scene_path, o.common.memory());
   if (o.format) file.output.format = *o.format;
   if (o.bits) file.output.bits = *o.bits;

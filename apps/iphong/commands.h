@@ -37,9 +37,9 @@ void AddThreadsOption(CLI::App* cmd, CommonOptions& common);
 void AddMemoryOption(CLI::App* cmd, CommonOptions& common);
 void AddOverwriteOption(CLI::App* cmd, CommonOptions& common);
 
-// One-line errors naming the path: "PATH: no such folder", "PATH: is a file, not a folder".
+// A one-line error naming the path unless it is a folder: "PATH: no such folder", "PATH: is a
+// file, not a folder". (Files need no such check: every reader in io makes it.)
 void RequireFolder(const std::string& path);
-void RequireFile(const std::string& path);
 
 void AddDemoCommand(CLI::App& app);
 void AddMaterialsCommand(CLI::App& app);

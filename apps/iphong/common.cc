@@ -2,7 +2,6 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "io/files.h"
 #include "iphong/commands.h"
 
 namespace iphong::cli {
@@ -32,7 +31,5 @@ void RequireFolder(const std::string& path) {
   if (!fs::exists(status)) throw std::runtime_error(path + ": no such folder");
   if (!fs::is_directory(status)) throw std::runtime_error(path + ": is a file, not a folder");
 }
-
-void RequireFile(const std::string& path) { io::RequireRegularFile(path); }
 
 }  // namespace iphong::cli

@@ -60,6 +60,11 @@ inline std::size_t Mask::count() const {
   return n;
 }
 
+// "612x512", as messages print image sizes.
+inline std::string SizeText(int width, int height) {
+  return std::to_string(width) + "x" + std::to_string(height);
+}
+
 // The pixels where some channel of `image` is non-zero (normal maps store 0 outside the object),
 // within `within` when given (same size).
 inline Mask NonZeroPixels(const ImageF& image, const Mask* within = nullptr) {

@@ -54,8 +54,7 @@ Vec3d Camera::ViewDirection(const Vec3d& point) const {
 
 std::string Camera::Validate() const {
   if (width <= 0 || height <= 0 || width > 65536 || height > 65536) {
-    return "camera size must be in 1..65536, got " + std::to_string(width) + "x" +
-           std::to_string(height);
+    return "camera size must be in 1..65536, got " + SizeText(width, height);
   }
   if (!rotation.allFinite() || !center.allFinite() ||
       !(rotation * rotation.transpose()).isIdentity(1e-9)) {

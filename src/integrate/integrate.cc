@@ -71,10 +71,9 @@ std::size_t CheckInputs(const ImageF& normals, const Mask& mask, bool allow_back
   std::size_t back_facing = 0;
   if (normals.channels != 3) throw std::invalid_argument("the normal map must have 3 channels");
   if (normals.width != mask.width || normals.height != mask.height) {
-    throw std::invalid_argument("mask is " + std::to_string(mask.width) + "x" +
-                                std::to_string(mask.height) + " but the normal map is " +
-                                std::to_string(normals.width) + "x" +
-                                std::to_string(normals.height));
+    throw std::invalid_argument("mask is " + SizeText(mask.width, mask.height) +
+                                " but the normal map is " +
+                                SizeText(normals.width, normals.height));
   }
   if (mask.count() == 0) throw std::invalid_argument("the mask is empty");
   for (int r = 0; r < normals.height; ++r) {

@@ -313,8 +313,7 @@ namespace {
 std::string DescribeRender(const Scene& scene, const RenderOptions& options, bool per_light) {
   auto square = [](int n) { return std::to_string(n) + "x" + std::to_string(n); };
   const std::string lights = std::to_string(scene.lighting.lights.size());
-  std::string text =
-      "rendering " + std::to_string(scene.camera.width) + "x" + std::to_string(scene.camera.height);
+  std::string text = "rendering " + SizeText(scene.camera.width, scene.camera.height);
   if (options.supersampling > 1)
     text += " with " + square(options.supersampling) + " supersampling";
   if (per_light) text += " and " + lights + " per-light images";

@@ -45,9 +45,8 @@ PhotometricData ObservationLayout(int width, int height, const Mask& mask,
                                   const std::vector<Vec3d>& light_directions,
                                   const std::vector<Vec3d>& light_intensities) {
   if (mask.width != width || mask.height != height) {
-    throw std::invalid_argument("the mask is " + std::to_string(mask.width) + "x" +
-                                std::to_string(mask.height) + ", the images " +
-                                std::to_string(width) + "x" + std::to_string(height));
+    throw std::invalid_argument("the mask is " + SizeText(mask.width, mask.height) +
+                                ", the images " + SizeText(width, height));
   }
   PhotometricData data;
   data.width = width;
