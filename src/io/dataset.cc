@@ -29,10 +29,6 @@ namespace {
                            message);
 }
 
-std::string Size(int width, int height) {
-  return std::to_string(width) + "x" + std::to_string(height);
-}
-
 ImageF ToRgb(ImageF image) {
   if (image.channels == 3) return image;
   ImageF rgb(image.width, image.height, 3);
@@ -42,6 +38,18 @@ ImageF ToRgb(ImageF image) {
     }
   }
   return rgb;
+}
+
+// One image of a dataset, refused from its header when its size is not the dataset's
+// (`reference` names the file that set it).
+ImageF ReadDatasetImage(const std::string& path, int width, int height,
+                        const std::string& reference, const MemoryLimit& memory) {
+  return ToRgb(ReadImage(path, memory, [&](const ImageHeader& h) {
+    if (h.width != width || h.height != height) {
+      Fail(path, "is " + SizeText(h.width, h.height) + ", but " + reference + " is " +
+                     SizeText(width, height));
+    }
+  }));
 }
 
 std::string Triples(const std::vector<Vec3d>& values) {
@@ -275,8 +283,8 @@ Dataset LoadDataset(const std::string& directory, const DatasetLoadOptions& opti
   if (fs::exists(mask_path, error)) {
     d.mask = ReadMask(mask_path.string(), options.memory);
     if (width > 0 && (d.mask.width != width || d.mask.height != height)) {
-      Fail(mask_path, "is " + Size(d.mask.width, d.mask.height) + ", the images are " +
-                          Size(width, height) + " (" + d.filenames[0] + ")");
+      Fail(mask_path, "is " + SizeText(d.mask.width, d.mask.height) + ", the images are " +
+                          SizeText(width, height) + " (" + d.filenames[0] + ")");
     }
     if (d.mask.count() == 0) Fail(mask_path, "selects no pixel (all zero; nonzero = object)");
   } else {
@@ -285,20 +293,14 @@ Dataset LoadDataset(const std::string& directory, const DatasetLoadOptions& opti
 
   if (options.load_images) {
     RequireMemory(options.memory, static_cast<double>(k) * width * height * 3 * sizeof(float),
-                  directory + ": " + std::to_string(k) + " images of " + Size(width, height));
+                  directory + ": " + std::to_string(k) + " images of " + SizeText(width, height));
     d.images.resize(k);
     std::vector<std::string> errors(k);
     ParallelFor(0, k, 1, options.threads, [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i) {
         const std::string path = (dir / d.filenames[i]).string();
         try {
-          const ImageHeader h = ReadImageHeader(path);
-          if (h.width != width || h.height != height) {
-            errors[i] = path + ": is " + Size(h.width, h.height) + ", but " + d.filenames[0] +
-                        " is " + Size(width, height);
-            continue;
-          }
-          d.images[i] = ToRgb(ReadImage(path, options.memory));
+          d.images[i] = ReadDatasetImage(path, width, height, d.filenames[0], options.memory);
         } catch (const std::exception& ex) {
           errors[i] = ex.what();
         }
@@ -325,8 +327,8 @@ Dataset LoadDataset(const std::string& directory, const DatasetLoadOptions& opti
     if (!d.normal_gt.pixels.empty()) {
       if (d.mask.width > 0 &&
           (d.normal_gt.width != d.mask.width || d.normal_gt.height != d.mask.height)) {
-        Fail(truth, "is " + Size(d.normal_gt.width, d.normal_gt.height) + ", the images are " +
-                        Size(d.mask.width, d.mask.height));
+        Fail(truth, "is " + SizeText(d.normal_gt.width, d.normal_gt.height) + ", the images are " +
+                        SizeText(d.mask.width, d.mask.height));
       }
       CheckNormalMap(d.normal_gt, truth.string());
     }
@@ -423,23 +425,17 @@ ObservationSet LoadObservations(const std::string& directory, const DatasetLoadO
   RequireMemory(
       options.memory,
       (static_cast<double>(k) * d.mask.count() * 3 + threads * 2.0 * w * h * 4) * sizeof(float),
-      directory + ": " + std::to_string(k) + " images of " + Size(w, h));
+      directory + ": " + std::to_string(k) + " images of " + SizeText(w, h));
   solve::PhotometricData& data = set.observations;
   data = solve::ObservationLayout(w, h, d.mask, d.light_directions, d.light_intensities);
   const bool srgb = DatasetIsSrgb(dir);
+  const std::string reference = fs::exists(dir / "mask.png") ? "mask.png" : d.filenames[0];
   std::vector<std::string> errors(k);
   ParallelFor(0, k, 1, options.threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t j = b; j < e; ++j) {
       const std::string path = (dir / d.filenames[j]).string();
       try {
-        const ImageHeader header = ReadImageHeader(path);
-        if (header.width != w || header.height != h) {
-          errors[j] = path + ": is " + Size(header.width, header.height) + ", but " +
-                      (fs::exists(dir / "mask.png") ? "mask.png" : d.filenames[0]) + " is " +
-                      Size(w, h);
-          continue;
-        }
-        ImageF image = ToRgb(ReadImage(path, options.memory));
+        ImageF image = ReadDatasetImage(path, w, h, reference, options.memory);
         if (srgb)
           for (float& v : image.pixels) v = SrgbToLinear(v);
         if (auto m = solve::GatherImage(data, static_cast<int>(j), image.pixels.data());

@@ -50,12 +50,11 @@ std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHead
       spec.get_int_attribute("oiio:BitsPerSample", static_cast<int>(spec.format.size()) * 8);
   const double declared = pixels * spec.nchannels * std::max(bits, 1) / 8.0;
   if (declared > kPlausibilityFloor && declared > kMaxCompression * file_bytes) {
-    Fail(path, "declares " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
-                   " pixels but has only " + std::to_string(file_bytes) +
-                   " bytes: truncated or corrupt");
+    Fail(path, "declares " + SizeText(spec.width, spec.height) + " pixels but has only " +
+                   std::to_string(file_bytes) + " bytes: truncated or corrupt");
   }
   if (pixels > kMaxPixels || spec.nchannels > 64) {
-    Fail(path, "declares " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + "x" +
+    Fail(path, "declares " + SizeText(spec.width, spec.height) + "x" +
                    std::to_string(spec.nchannels) +
                    ", more than iphong handles (2^31 pixels, 64 channels)");
   }
@@ -123,13 +122,14 @@ ImageHeader ReadImageHeader(const std::string& path) {
   return header;
 }
 
-ImageF ReadImage(const std::string& path, const MemoryLimit& memory) {
+ImageF ReadImage(const std::string& path, const MemoryLimit& memory,
+                 const std::function<void(const ImageHeader&)>& check) {
   ImageHeader h;
   auto in = OpenChecked(path, &h);
+  if (check) check(h);
   // The float image, and the decoder's own buffer of at most the same size.
   RequireMemory(memory, 2.0 * h.width * h.height * h.channels * sizeof(float),
-                path + ": decoding this " + std::to_string(h.width) + "x" +
-                    std::to_string(h.height) + " image");
+                path + ": decoding this " + SizeText(h.width, h.height) + " image");
   ImageF image(h.width, h.height, h.channels);
   if (!in->read_image(0, 0, 0, h.channels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
     Fail(path, "cannot decode: " + in->geterror());

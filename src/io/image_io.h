@@ -4,6 +4,7 @@
 // optionally sRGB-encoded; float files (EXR, float TIFF) keep the values as they are.
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include "core/resources.h"
@@ -38,10 +39,12 @@ struct ImageHeader {
 ImageHeader ReadImageHeader(const std::string& path);
 
 // Reads any format OpenImageIO knows into linear float, integer formats scaled to [0, 1]
-// (no transfer curve is undone). Checks the header first (ReadImageHeader) and the memory the
-// decoded image needs against `memory` before allocating it (ResourceError). Throws
-// std::runtime_error naming the file.
-ImageF ReadImage(const std::string& path, const MemoryLimit& memory = {});
+// (no transfer curve is undone). Checks the header first (ReadImageHeader); then `check`, when
+// given, sees it and may throw (a size that is not the dataset's, a mesh budget); then the memory
+// the decoded image needs is checked against `memory` (ResourceError). Nothing is allocated
+// before. Throws std::runtime_error naming the file.
+ImageF ReadImage(const std::string& path, const MemoryLimit& memory = {},
+                 const std::function<void(const ImageHeader&)>& check = {});
 
 // A mask picture: a pixel is inside where any of its first three channels is non-zero.
 Mask ReadMask(const std::string& path, const MemoryLimit& memory = {});

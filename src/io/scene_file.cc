@@ -201,9 +201,9 @@ render::SceneObject ParseObject(const JsonReader& j, ParseContext& context) {
       }
       if (j.Has("image")) {
         const std::string path = context.Input(j.Field("image").String());
-        const ImageHeader header = ReadImageHeader(path);
-        context.Reserve(j, 2.0 * header.width * header.height);
-        ImageF heights = ReadImage(path, context.memory);
+        ImageF heights = ReadImage(path, context.memory, [&](const ImageHeader& h) {
+          context.Reserve(j, 2.0 * h.width * h.height);
+        });
         const double scale = j.Number("scale", 0.1);
         for (float& v : heights.pixels) v = static_cast<float>(v * scale);
         if (heights.channels > 1) {  // keep the first channel
