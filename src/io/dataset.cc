@@ -353,55 +353,53 @@ void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const rende
     if (std::string m = CheckDatasetLights(scene); !m.empty()) throw std::invalid_argument(m);
   }
   auto file = [&](const std::string& name) { return out.file(prefix + name); };
-  {
-    const std::string ext = settings.extension();
-    const WriteOptions image_options = settings.write_options();
-    if (per_light) {
-      std::string names;
-      std::vector<Vec3d> directions, intensities;
-      const int digits = std::max<int>(3, std::to_string(output.per_light.size()).size());
-      for (std::size_t j = 0; j < output.per_light.size(); ++j) {
-        std::string number = std::to_string(j + 1);
-        number.insert(0, digits - number.size(), '0');
-        WriteImage(file(number + ext), output.per_light[j], image_options);
-        names += number + ext + "\n";
-        directions.push_back(scene.lighting.lights[j].direction_cam);
-        intensities.push_back(scene.lighting.lights[j].diffuse_intensity);
-      }
-      WriteTextFile(file("filenames.txt"), names);
-      WriteTextFile(file("light_directions.txt"), Triples(directions));
-      WriteTextFile(file("light_intensities.txt"), Triples(intensities));
-    } else {
-      WriteImage(file("image" + ext), output.image, image_options);
+  const std::string ext = settings.extension();
+  const WriteOptions image_options = settings.write_options();
+  if (per_light) {
+    std::string names;
+    std::vector<Vec3d> directions, intensities;
+    const int digits = std::max<int>(3, std::to_string(output.per_light.size()).size());
+    for (std::size_t j = 0; j < output.per_light.size(); ++j) {
+      std::string number = std::to_string(j + 1);
+      number.insert(0, digits - number.size(), '0');
+      WriteImage(file(number + ext), output.per_light[j], image_options);
+      names += number + ext + "\n";
+      directions.push_back(scene.lighting.lights[j].direction_cam);
+      intensities.push_back(scene.lighting.lights[j].diffuse_intensity);
     }
-    WriteImage(file("mask.png"), MaskImage(output.mask), {8, Encoding::kLinear});
-    WriteImage(file("normals.exr"), output.normal_cam);
-    WriteImage(file("normals.png"), NormalMapPicture(output.normal_cam, output.mask),
-               {16, Encoding::kLinear});
-    WriteImage(file("depth.exr"), output.depth);
-    WriteImage(file("albedo.exr"), output.albedo);
-    WriteNormalMat(file("Normal_gt.mat"), "Normal_gt", output.normal_cam);
-    WriteTextFile(file("material.json"), MaterialJson(scene, options).dump(2) + "\n");
-    nlohmann::json meta;
-    meta["generator"] = "iphong render";
-    meta["images"] = per_light ? output.per_light.size() : 1;
-    meta["format"] = settings.format;
-    meta["bits"] = settings.format == "exr" ? 32 : settings.bits;
-    meta["encoding"] =
-        settings.format == "exr" || settings.encoding == Encoding::kLinear ? "linear" : "srgb";
-    meta["shading"] = render::ShadingName(options.shading);
-    meta["camera"] =
-        scene.camera.type == geometry::CameraType::kOrthographic ? "orthographic" : "perspective";
-    meta["depth"] = "distance along the view axis in scene units; 0 outside the mask";
-    meta["frame"] = "camera frame: x right, y up, z toward the viewer; row 0 at the top";
-    meta["supersampling"] = options.supersampling;
-    meta["shadows"] = options.shadows;
-    meta["noise"] = {{"gaussian_sigma", options.noise.gaussian_sigma},
-                     {"shot_photons", options.noise.shot_photons},
-                     {"quantization_bits", options.noise.quantization_bits},
-                     {"seed", options.noise.seed}};
-    WriteTextFile(file("render.json"), meta.dump(2) + "\n");
+    WriteTextFile(file("filenames.txt"), names);
+    WriteTextFile(file("light_directions.txt"), Triples(directions));
+    WriteTextFile(file("light_intensities.txt"), Triples(intensities));
+  } else {
+    WriteImage(file("image" + ext), output.image, image_options);
   }
+  WriteImage(file("mask.png"), MaskImage(output.mask), {8, Encoding::kLinear});
+  WriteImage(file("normals.exr"), output.normal_cam);
+  WriteImage(file("normals.png"), NormalMapPicture(output.normal_cam, output.mask),
+             {16, Encoding::kLinear});
+  WriteImage(file("depth.exr"), output.depth);
+  WriteImage(file("albedo.exr"), output.albedo);
+  WriteNormalMat(file("Normal_gt.mat"), "Normal_gt", output.normal_cam);
+  WriteTextFile(file("material.json"), MaterialJson(scene, options).dump(2) + "\n");
+  nlohmann::json meta;
+  meta["generator"] = "iphong render";
+  meta["images"] = per_light ? output.per_light.size() : 1;
+  meta["format"] = settings.format;
+  meta["bits"] = settings.format == "exr" ? 32 : settings.bits;
+  meta["encoding"] =
+      settings.format == "exr" || settings.encoding == Encoding::kLinear ? "linear" : "srgb";
+  meta["shading"] = render::ShadingName(options.shading);
+  meta["camera"] =
+      scene.camera.type == geometry::CameraType::kOrthographic ? "orthographic" : "perspective";
+  meta["depth"] = "distance along the view axis in scene units; 0 outside the mask";
+  meta["frame"] = "camera frame: x right, y up, z toward the viewer; row 0 at the top";
+  meta["supersampling"] = options.supersampling;
+  meta["shadows"] = options.shadows;
+  meta["noise"] = {{"gaussian_sigma", options.noise.gaussian_sigma},
+                   {"shot_photons", options.noise.shot_photons},
+                   {"quantization_bits", options.noise.quantization_bits},
+                   {"seed", options.noise.seed}};
+  WriteTextFile(file("render.json"), meta.dump(2) + "\n");
 }
 
 }  // namespace iphong::io
