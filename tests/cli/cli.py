@@ -34,7 +34,7 @@ def run(*args, cwd=None, env=None, timeout=120, preexec_fn=None):
 
 
 def snapshot(root):
-    """Every file and folder under root (hidden ones included): path -> sha256 (None for folders)."""
+    """Every file and folder under root, hidden ones included: path -> sha256 (None: a folder)."""
     root = pathlib.Path(root)
     state = {}
     for path in sorted(root.rglob("*")):
@@ -58,6 +58,15 @@ def assert_one_line_error(code, stderr, expected_code, pattern, names=None):
     assert re.search(pattern, lines[0]), f"{pattern!r} not in {lines[0]!r}"
     if names is not None:
         assert str(names) in lines[0], f"{names} not named in {lines[0]!r}"
+
+
+def assert_refused(root, args, expected_code, pattern, names=None, **run_options):
+    """Runs `iphong ARGS`: it must fail cleanly (assert_one_line_error) and leave every file
+    under root, byte for byte, as it was."""
+    before = snapshot(root)
+    code, _, err = run(*args, **run_options)
+    assert_one_line_error(code, err, expected_code, pattern, names)
+    assert snapshot(root) == before
 
 
 def render_dataset(path, *extra):

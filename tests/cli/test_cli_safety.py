@@ -20,6 +20,7 @@ from cli import (
     PARTIAL,
     PHOTOMETRIC_SCENE,
     assert_one_line_error,
+    assert_refused,
     binary_available,
     render_dataset,
     run,
@@ -84,20 +85,15 @@ def assert_complete(folder, staging_allowed=False):
     ],
 )
 def test_normals_output_over_its_input_is_refused(capture, tmp_path, target, pattern):
-    before = snapshot(tmp_path)
-    code, out, err = run("normals", "capture", "-o", target, cwd=tmp_path)
-    assert_one_line_error(code, err, 4, pattern)
-    assert snapshot(tmp_path) == before
+    assert_refused(tmp_path, ["normals", "capture", "-o", target], 4, pattern, cwd=tmp_path)
 
 
 def test_render_into_the_scene_folder_is_refused(tmp_path):
     scene = tmp_path / "scene"
     scene.mkdir()
     shutil.copy(FIXTURES / "scenes/issue3_sphere.json", scene / "scene.json")
-    before = snapshot(tmp_path)
-    code, _, err = run("render", "scene.json", "-o", ".", cwd=scene)
-    assert_one_line_error(code, err, 4, r"\.: contains the input scene\.json")
-    assert snapshot(tmp_path) == before
+    assert_refused(tmp_path, ["render", "scene.json", "-o", "."],
+                   4, r"\.: contains the input scene\.json", cwd=scene)
 
 
 def test_render_output_may_not_hold_its_mesh(tmp_path):
@@ -106,20 +102,16 @@ def test_render_output_may_not_hold_its_mesh(tmp_path):
     scene = tmp_path / "scene.json"
     scene.write_text(json.dumps({"width": 32, "height": 32, "lights": [{"direction": [0, 0, 1]}],
                                  "objects": [{"shape": "mesh", "path": "assets/tri.obj"}]}))
-    before = snapshot(tmp_path)
-    code, _, err = run("render", scene, "-o", tmp_path / "assets")
-    assert_one_line_error(code, err, 4, r"assets: contains the input .*tri\.obj")
-    assert snapshot(tmp_path) == before
+    assert_refused(tmp_path, ["render", scene, "-o", tmp_path / "assets"],
+                   4, r"assets: contains the input .*tri\.obj")
     code, _, err = run("render", scene, "-o", tmp_path / "out")
     assert code == 0, err
 
 
 def test_output_over_a_file_is_refused(capture, tmp_path):
     (tmp_path / "notes.txt").write_text("mine")
-    before = snapshot(tmp_path)
-    code, _, err = run("normals", capture, "-o", tmp_path / "notes.txt")
-    assert_one_line_error(code, err, 4, r"notes\.txt: exists and is not a folder")
-    assert snapshot(tmp_path) == before
+    assert_refused(tmp_path, ["normals", capture, "-o", tmp_path / "notes.txt"],
+                   4, r"notes\.txt: exists and is not a folder")
 
 
 def test_a_dangling_or_looping_symlink_is_not_replaced(capture, tmp_path):
@@ -137,10 +129,8 @@ def test_a_dangling_or_looping_symlink_is_not_replaced(capture, tmp_path):
 def test_a_folder_iphong_did_not_write_is_refused(capture, tmp_path):
     (tmp_path / "mine").mkdir()
     (tmp_path / "mine" / "normals.exr").write_text("my own file")
-    before = snapshot(tmp_path)
-    code, _, err = run("normals", capture, "-o", tmp_path / "mine")
-    assert_one_line_error(code, err, 4, r"mine: is not empty and was not written by iphong")
-    assert snapshot(tmp_path) == before
+    assert_refused(tmp_path, ["normals", capture, "-o", tmp_path / "mine"],
+                   4, r"mine: is not empty and was not written by iphong")
 
 
 def test_an_empty_folder_is_used(capture, tmp_path):
@@ -175,7 +165,8 @@ def test_overwrite_replaces_only_what_iphong_wrote(capture, tmp_path):
     before = snapshot(tmp_path)
     files_before = visible(out)
     code, _, err = run("normals", capture, "-o", out, "--fast")
-    assert_one_line_error(code, err, 4, r"holds an earlier `iphong normals` output; pass --overwrite")
+    assert_one_line_error(code, err, 4,
+                          r"holds an earlier `iphong normals` output; pass --overwrite")
     assert snapshot(tmp_path) == before
     code, _, err = run("normals", capture, "-o", out, "--fast", "--overwrite")
     assert code == 0, err
@@ -196,31 +187,25 @@ def test_overwrite_replaces_only_what_iphong_wrote(capture, tmp_path):
 def test_a_changed_output_file_is_not_replaced(capture, tmp_path):
     out = normals_into(tmp_path / "out", capture)
     (out / "metrics.json").write_text("edited by hand")
-    before = snapshot(tmp_path)
-    code, _, err = run("normals", capture, "-o", out, "--overwrite")
-    assert_one_line_error(code, err, 4, r"metrics\.json: changed since `iphong normals` wrote it")
-    assert snapshot(tmp_path) == before
+    assert_refused(tmp_path, ["normals", capture, "-o", out, "--overwrite"],
+                   4, r"metrics\.json: changed since `iphong normals` wrote it")
 
 
 def test_another_commands_output_is_refused(capture, tmp_path):
     out = normals_into(tmp_path / "out", capture)
-    before = snapshot(tmp_path)
-    code, _, err = run("render", PHOTOMETRIC_SCENE, "-o", out, "--overwrite")
-    assert_one_line_error(code, err, 4, r"holds the output of `iphong normals`")
-    assert snapshot(tmp_path) == before
+    assert_refused(tmp_path, ["render", PHOTOMETRIC_SCENE, "-o", out, "--overwrite"],
+                   4, r"holds the output of `iphong normals`")
 
 
 def test_error_map_is_a_new_file_unless_overwrite(capture, tmp_path):
     out = normals_into(tmp_path / "out", capture)
     (tmp_path / "map.png").write_text("not iphong's")
-    before = snapshot(tmp_path)
-    code, _, err = run("eval", out / "normals.exr", capture, "--error-map", tmp_path / "map.png")
-    assert_one_line_error(code, err, 4, r"map\.png: exists; pass --overwrite")
-    assert snapshot(tmp_path) == before
-    code, _, err = run("eval", out / "normals.exr", capture, "--error-map", out / "normals.exr",
-                       "--overwrite")
-    assert_one_line_error(code, err, 4, r"normals\.exr: is an input")
-    assert snapshot(tmp_path) == before
+    assert_refused(tmp_path,
+                   ["eval", out / "normals.exr", capture, "--error-map", tmp_path / "map.png"],
+                   4, r"map\.png: exists; pass --overwrite")
+    assert_refused(tmp_path, ["eval", out / "normals.exr", capture, "--error-map",
+                              out / "normals.exr", "--overwrite"],
+                   4, r"normals\.exr: is an input")
     code, _, err = run("eval", out / "normals.exr", capture, "--error-map", tmp_path / "new.png")
     assert code == 0, err
     assert (tmp_path / "new.png").stat().st_size > 100
@@ -237,20 +222,15 @@ def limit_file_size(blocks_bytes):
 
 
 def test_file_size_limit_fails_cleanly_and_writes_nothing(capture, tmp_path):
-    before = snapshot(tmp_path)
-    code, _, err = run("normals", capture, "-o", tmp_path / "out",
-                       preexec_fn=limit_file_size(10000))
-    assert_one_line_error(code, err, 4, r"out/[a-z]+\.[a-z]+: cannot write: File too large")
-    assert snapshot(tmp_path) == before
+    assert_refused(tmp_path, ["normals", capture, "-o", tmp_path / "out"],
+                   4, r"out/[a-z]+\.[a-z]+: cannot write: File too large",
+                   preexec_fn=limit_file_size(10000))
 
 
 def test_file_size_limit_during_overwrite_keeps_the_old_output(capture, tmp_path):
     out = normals_into(tmp_path / "out", capture)
-    before = snapshot(tmp_path)
-    code, _, err = run("normals", capture, "-o", out, "--overwrite", "--integrate",
-                       preexec_fn=limit_file_size(100000))
-    assert_one_line_error(code, err, 4, r"cannot write: File too large")
-    assert snapshot(tmp_path) == before
+    assert_refused(tmp_path, ["normals", capture, "-o", out, "--overwrite", "--integrate"],
+                   4, r"cannot write: File too large", preexec_fn=limit_file_size(100000))
 
 
 def mounted_tmpfs(folder, size):
@@ -303,10 +283,9 @@ def test_full_disk_while_replacing_an_output_keeps_it(capture, small_disk, tmp_p
     assert code == 0, err
     code, _, err = run("normals", tmp_path / "small", "-o", tiny_disk / "out")
     assert code == 0, err
-    before = snapshot(tiny_disk)
-    code, _, err = run("normals", capture, "-o", tiny_disk / "out", "--overwrite", "--integrate")
-    assert_one_line_error(code, err, 4, r"No space left on device")
-    assert snapshot(tiny_disk) == before
+    assert_refused(tiny_disk,
+                   ["normals", capture, "-o", tiny_disk / "out", "--overwrite", "--integrate"],
+                   4, r"No space left on device")
 
 
 # --- interrupted runs ----------------------------------------------------------------------
