@@ -3,6 +3,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <cstring>
 
 #include "arrays.h"
@@ -76,10 +77,27 @@ void BindRender(py::module_& m) {
 
   m.def(
       "load_dataset",
-      [](const std::string& directory, const py::object& max_memory_gb) {
+      [](const std::string& directory, const py::object& max_memory_gb, const std::string& lights,
+         const std::string& intensities, const std::string& mask, const std::string& encoding,
+         const py::object& crop, int downscale) {
         io::Dataset d;
         io::DatasetLoadOptions options;
         options.memory = Limit(max_memory_gb);
+        options.capture.lights = lights;
+        options.capture.intensities = intensities;
+        options.capture.mask = mask;
+        options.capture.encoding = encoding;
+        options.capture.downscale = downscale;
+        if (!crop.is_none()) {
+          const std::vector<double> r = ToNumbers(crop, 4, "crop (x, y, w, h)");
+          for (double v : r) {
+            if (v != std::floor(v) || std::abs(v) > 1e9) {
+              throw std::invalid_argument("crop: expected four whole numbers (x, y, w, h)");
+            }
+          }
+          options.capture.crop = {int(r[0]), int(r[1]), int(r[2]), int(r[3])};
+        }
+        if (std::string m = options.capture.Check(); !m.empty()) throw std::invalid_argument(m);
         {
           py::gil_scoped_release release;
           d = io::LoadDataset(directory, options);
@@ -105,12 +123,27 @@ void BindRender(py::module_& m) {
           result["material"] = py::none();
         }
         result["warnings"] = d.warnings;
+        result["description"] = io::DescribeDataset(d);
+        result["encoding"] = d.encoding.encoding == io::Encoding::kSrgb ? "srgb" : "linear";
+        py::list counts;
+        for (const io::ImageCounts& c : d.image_counts) {
+          py::dict one;
+          one["saturated_pixels"] = c.saturated;
+          one["black_pixels"] = c.black;
+          counts.append(one);
+        }
+        result["image_counts"] = counts;
         return result;
       },
-      py::arg("directory"), py::arg("max_memory_gb") = py::none(),
-      R"doc(Read a dataset directory (DiLiGenT layout) into numpy arrays:
-images (K, H, W, 3) float32 linear, light_directions (K, 3), light_intensities (K, 3),
-mask (H, W) bool, normal_gt (H, W, 3) or None, material (dict) or None, filenames, warnings.
+      py::arg("directory"), py::arg("max_memory_gb") = py::none(), py::kw_only(),
+      py::arg("lights") = "", py::arg("intensities") = "", py::arg("mask") = "",
+      py::arg("encoding") = "auto", py::arg("crop") = py::none(), py::arg("downscale") = 1,
+      R"doc(Read a capture folder into numpy arrays: any layout `iphong normals` reads (DiLiGenT,
+UW, RTI .lp, a folder of images with a light file), with the same options (lights, intensities,
+mask: files; encoding "auto"/"linear"/"srgb"; crop (x, y, w, h) in the files' pixels; downscale N).
+Returns images (K, H, W, 3) float32 linear, light_directions (K, 3), light_intensities (K, 3),
+mask (H, W) bool, normal_gt (H, W, 3) or None, material (dict) or None, filenames, warnings,
+description (what was read, one line), encoding, image_counts (saturated and black pixels).
 Raises ValueError naming the file (and line) on bad input, and when the images would need more
 memory than max_memory_gb (default: three quarters of the machine's).)doc");
 }

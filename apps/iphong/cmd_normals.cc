@@ -35,8 +35,30 @@ struct NormalsCommandOptions {
   int specular_clusters = 1;
   bool uniform_specular = false;
   double specular_prior = solve::NormalOptions{}.specular_prior;
+  CaptureFlags capture;
   CommonOptions common;
 };
+
+nlohmann::json InputJson(const io::Dataset& d) {
+  nlohmann::json counts = nlohmann::json::array();
+  for (std::size_t j = 0; j < d.image_counts.size(); ++j) {
+    counts.push_back({{"file", d.filenames[j]},
+                      {"saturated_pixels", d.image_counts[j].saturated},
+                      {"black_pixels", d.image_counts[j].black}});
+  }
+  return {{"layout", d.files.layout},
+          {"order", d.files.order},
+          {"lights", d.files.lights_path},
+          {"lights_format", d.files.lights_format},
+          {"intensities", d.files.intensities_source},
+          {"mask", d.files.mask_path},
+          {"encoding", d.encoding.encoding == io::Encoding::kSrgb ? "srgb" : "linear"},
+          {"encoding_reason", d.encoding.reason},
+          {"file_size", {d.file_width, d.file_height}},
+          {"size", {d.mask.width, d.mask.height}},
+          {"ground_truth", d.files.ground_truth_path},
+          {"images", counts}};
+}
 
 nlohmann::json MetricsJson(const solve::AngularErrorMetrics& m) {
   return {{"evaluated_pixels", m.pixels},
@@ -53,7 +75,6 @@ double ErrorScale(const solve::AngularErrorMetrics& m) {
 
 void RunNormals(const NormalsCommandOptions& o) {
   const auto total_start = Clock::now();
-  const bool tty = ErrIsTerminal();
   RequireFolder(o.dataset);
   // The output folder is checked first: a refusal costs nothing.
   io::OutputFolderOptions folder;
@@ -62,11 +83,19 @@ void RunNormals(const NormalsCommandOptions& o) {
   folder.inputs = {o.dataset};
   io::OutputFolder out(o.output_dir, folder);
   io::DatasetLoadOptions load;
+  load.capture = o.capture.resolved();
   load.threads = o.common.threads;
   load.memory = o.common.memory();
-  io::ObservationSet loaded = io::LoadObservations(o.dataset, load);
+  io::ObservationSet loaded;
+  {
+    Progress decode("decode", o.common.talk());
+    load.progress = [&decode](double fraction) { decode.Update(fraction); };
+    loaded = io::LoadObservations(o.dataset, load);
+  }
   io::Dataset& dataset = loaded.dataset;
+  Say(o.common, "Read %s: %s\n", o.dataset.c_str(), io::DescribeDataset(dataset).c_str());
   for (const std::string& warning : dataset.warnings) Warn(warning);
+  if (std::string counts = io::DescribeImageCounts(dataset); !counts.empty()) Warn(counts);
   solve::NormalOptions options;
   options.discard_dark = o.discard_dark;
   options.discard_bright = o.discard_bright;
@@ -86,11 +115,8 @@ void RunNormals(const NormalsCommandOptions& o) {
     if (dataset.material->kd_known) options.known_albedo = dataset.material->material.kd;
   }
   if (o.model) options.model = reflectance::ParseLobe(*o.model);
-  if (tty) {
-    options.progress = [](double fraction) {
-      std::fprintf(Err(), "\rsolving normals: %3.0f%%", 100 * fraction);
-    };
-  }
+  auto fit_progress = std::make_shared<Progress>("fit", o.common.talk());
+  options.progress = [fit_progress](double fraction) { fit_progress->Update(fraction); };
 
   const solve::PhotometricData& data = loaded.observations;  // masked pixels only
   const double load_seconds = SecondsSince(total_start);
@@ -103,11 +129,13 @@ void RunNormals(const NormalsCommandOptions& o) {
                              "included");
   }
   const solve::NormalResult result = solve::RecoverNormals(data, options);
+  options.progress = nullptr;
+  fit_progress.reset();  // clears its line
   const ImageF& ambiguity = result.ambiguity_deg;
-  if (tty) std::fprintf(Err(), "\r%30s\r", "");
 
   nlohmann::json metrics;
   metrics["dataset"] = o.dataset;
+  metrics["input"] = InputJson(dataset);
   metrics["pixels"] = data.pixel_count();
   metrics["images"] = data.images;
   metrics["model"] = reflectance::LobeName(options.model);
@@ -181,6 +209,8 @@ void RunNormals(const NormalsCommandOptions& o) {
     integrate::IntegrateOptions integration;
     integration.allow_back_facing = true;
     integration.threads = o.common.threads;
+    auto integrate_progress = std::make_shared<Progress>("integrate", o.common.talk());
+    integration.progress = [integrate_progress](double f) { integrate_progress->Update(f); };
     RequireMemory(
         o.common.memory(), io::EstimateSurfaceBytes(with_normal.count(), integration),
         o.dataset + ": integrating and meshing " + std::to_string(with_normal.count()) + " pixels");
@@ -195,59 +225,60 @@ void RunNormals(const NormalsCommandOptions& o) {
   metrics["total_seconds"] = SecondsSince(total_start);
   io::WriteTextFile(out.file("metrics.json"), metrics.dump(2) + "\n");
   out.Commit();
+  PrintJson(o.common, metrics.dump(2));
 
   if (ambiguity.pixels.empty()) {
-    std::printf(
+    Say(o.common,
         "%zu pixels x %d images, model %s: load %.2f s, Woodham %.2f s, specular %.2f s, "
         "per-pixel fit %.2f s\n",
         data.pixel_count(), data.images, reflectance::LobeName(options.model).c_str(), load_seconds,
         result.summary.init_seconds, result.summary.specular_seconds, result.summary.solve_seconds);
   } else {
-    std::printf(
+    Say(o.common,
         "%zu pixels x %d images, model %s: load %.2f s, global solve with priors %.2f s "
         "(%lld iterations)\n",
         data.pixel_count(), data.images, reflectance::LobeName(options.model).c_str(), load_seconds,
         result.summary.solve_seconds, result.summary.iterations);
   }
   if (result.clusters.size() > 1) {
-    std::printf("Estimated per albedo cluster:\n");
+    Say(o.common, "Estimated per albedo cluster:\n");
     for (std::size_t i = 0; i < result.clusters.size(); ++i) {
       const solve::SpecularCluster& c = result.clusters[i];
-      std::printf(
+      Say(o.common,
           "  #%zu: %zu pixels, albedo [%.3f %.3f %.3f]: ks = [%.3f %.3f %.3f], shininess = "
           "%.1f (%s)\n",
           i, c.pixels, c.albedo_center[0], c.albedo_center[1], c.albedo_center[2], c.ks[0], c.ks[1],
           c.ks[2], c.shininess, c.note.c_str());
     }
   } else if (result.material_estimated) {
-    std::printf(
+    Say(o.common,
         "Estimated ks = [%.3f %.3f %.3f], shininess = %.1f, ambient = [%.3f %.3f %.3f] (%s)\n",
         result.ks[0], result.ks[1], result.ks[2], result.shininess, result.ambient_term[0],
         result.ambient_term[1], result.ambient_term[2], result.specular_note.c_str());
   } else if (!result.specular_note.empty()) {
-    std::printf("%s\n", result.specular_note.c_str());
+    Say(o.common, "%s\n", result.specular_note.c_str());
   }
   if (result.summary.dark_pixels + result.summary.underdetermined_pixels > 0) {
-    std::printf(
+    Say(o.common,
         "%zu pixels dark in every image and %zu with fewer than 3 usable lights: "
         "flagged -1 in residual.exr\n",
         result.summary.dark_pixels, result.summary.underdetermined_pixels);
   }
   if (errors) {
-    std::printf(
+    Say(o.common,
         "Angular error against the ground truth: mean %.2f deg, median %.2f deg "
         "(< 5 deg: %.0f%%, < 10 deg: %.0f%%, < 20 deg: %.0f%%)\n",
         errors->mean_deg, errors->median_deg, 100 * errors->below_5_deg, 100 * errors->below_10_deg,
         100 * errors->below_20_deg);
   }
   if (surface) {
-    std::printf(
+    Say(o.common,
         "Integrated heights (%s, %.3f s): surface normals vs recovered: mean %.2f deg; "
         "mesh %zu triangles\n",
         integrate::MethodName(heights.summary.method), heights.summary.total_seconds,
         surface->consistency_mean_deg, surface->triangles);
   }
-  std::printf(
+  Say(o.common,
       "Wrote %s: normals.exr, normals.png, albedo.exr, residual.exr, metrics.json%s%s%s%s%s%s\n",
       o.output_dir.c_str(), result.material_estimated ? ", material.json" : "",
       specular_map ? ", specular.exr" : "", errors ? ", error.png" : "",
@@ -311,7 +342,9 @@ void RunEval(const EvalOptions& o) {
 void AddNormalsCommand(CLI::App& app) {
   auto o = std::make_shared<NormalsCommandOptions>();
   auto* cmd = app.add_subcommand("normals", "Recover normals and albedo from a dataset directory");
-  cmd->add_option("dataset", o->dataset, "Dataset folder (DiLiGenT layout)")->required();
+  cmd->add_option("dataset", o->dataset,
+                  "Capture folder: DiLiGenT, UW, RTI .lp, or a folder of images with a light file")
+      ->required();
   cmd->add_option("-o,--output", o->output_dir,
                   "Output folder: new or empty, or an earlier normals output with --overwrite")
       ->required();
@@ -355,9 +388,11 @@ void AddNormalsCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--integrate", o->integrate,
                 "Also integrate the normals: height.exr, mesh.ply (albedo colours), height.png");
+  AddCaptureOptions(cmd, o->capture);
   AddOverwriteOption(cmd, o->common);
   AddThreadsOption(cmd, o->common);
   AddMemoryOption(cmd, o->common);
+  AddReportOptions(cmd, o->common);
   cmd->callback([o] { RunNormals(*o); });
 
   auto e = std::make_shared<EvalOptions>();

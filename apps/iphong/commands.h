@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/resources.h"
+#include "io/capture.h"
 
 namespace iphong::cli {
 
@@ -26,6 +27,10 @@ struct CommonOptions {
   int threads = 0;
   double max_memory_gb = 0;  // 0 = three quarters of the machine's memory
   bool overwrite = false;
+  bool quiet = false;  // nothing on stdout, no progress; errors and warnings still on stderr
+  bool json = false;   // the run's summary as JSON on stdout, nothing else there
+
+  bool talk() const { return !quiet && !json; }  // human-readable lines and progress
 
   MemoryLimit memory() const {
     MemoryLimit limit;
@@ -36,6 +41,22 @@ struct CommonOptions {
 void AddThreadsOption(CLI::App* cmd, CommonOptions& common);
 void AddMemoryOption(CLI::App* cmd, CommonOptions& common);
 void AddOverwriteOption(CLI::App* cmd, CommonOptions& common);
+void AddReportOptions(CLI::App* cmd, CommonOptions& common);  // --quiet, --json
+
+// --lights, --intensities, --mask, --encoding, --crop, --downscale: how a capture folder is read.
+struct CaptureFlags {
+  io::CaptureOptions options;
+  std::vector<int> crop;  // x, y, w, h
+  io::CaptureOptions resolved() const;
+};
+void AddCaptureOptions(CLI::App* cmd, CaptureFlags& flags);
+
+// printf to stdout when the run talks (not --quiet, not --json).
+void Say(const CommonOptions& common, const char* format, ...)
+    __attribute__((format(printf, 2, 3)));
+
+// With --json, the summary on stdout (one JSON document).
+void PrintJson(const CommonOptions& common, const std::string& json_text);
 
 // A one-line error naming the path unless it is a folder: "PATH: no such folder", "PATH: is a
 // file, not a folder". (Files need no such check: every reader in io makes it.)

@@ -1,4 +1,6 @@
 // Flags and checks the subcommands share.
+#include <cstdarg>
+#include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 
@@ -23,6 +25,56 @@ void AddOverwriteOption(CLI::App* cmd, CommonOptions& common) {
   cmd->add_flag("--overwrite", common.overwrite,
                 "Replace the files of an earlier output of this command in -o (only those; "
                 "nothing else in the folder is touched)");
+}
+
+void AddReportOptions(CLI::App* cmd, CommonOptions& common) {
+  cmd->add_flag("-q,--quiet", common.quiet, "Print nothing but errors and warnings");
+  cmd->add_flag("--json", common.json,
+                "Print the run's summary as one JSON document on stdout (for scripts)");
+}
+
+void AddCaptureOptions(CLI::App* cmd, CaptureFlags& f) {
+  cmd->add_option("--lights", f.options.lights,
+                  "Light file: directions per line, UW lights.txt (count line), RTI .lp, or "
+                  "AliceVision lights JSON (default: found in the folder or its parent)");
+  cmd->add_option("--intensities", f.options.intensities,
+                  "Light intensities, 'r g b' per light (default: light_intensities.txt, else 1)");
+  cmd->add_option("--mask", f.options.mask,
+                  "Mask picture, nonzero = object (default: mask.png, mask.*, NAME.mask.*, "
+                  "NAME_mask.*; else the whole image)");
+  cmd->add_option("--encoding", f.options.encoding,
+                  "How the image values are encoded: auto (what the files state, else linear), "
+                  "linear, srgb")
+      ->check(CLI::IsMember({"auto", "linear", "srgb"}))
+      ->capture_default_str();
+  cmd->add_option("--crop", f.crop,
+                  "Use only this rectangle of the images, mask and ground truth: x,y,w,h in the "
+                  "files' pixels (applied before --downscale)")
+      ->delimiter(',')
+      ->expected(4);
+  cmd->add_option("--downscale", f.options.downscale,
+                  "Average N x N pixel blocks (images, mask, ground truth) before anything else")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+}
+
+io::CaptureOptions CaptureFlags::resolved() const {
+  io::CaptureOptions o = options;
+  if (crop.size() == 4) o.crop = {crop[0], crop[1], crop[2], crop[3]};
+  if (std::string m = o.Check(); !m.empty()) throw CLI::ValidationError("--crop", m);
+  return o;
+}
+
+void Say(const CommonOptions& common, const char* format, ...) {
+  if (!common.talk()) return;
+  va_list args;
+  va_start(args, format);
+  std::vfprintf(stdout, format, args);
+  va_end(args);
+}
+
+void PrintJson(const CommonOptions& common, const std::string& json_text) {
+  if (common.json) std::printf("%s\n", json_text.c_str());
 }
 
 void RequireFolder(const std::string& path) {

@@ -5,6 +5,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
@@ -85,6 +86,43 @@ void SetUpConsole() {
 FILE* Err() { return own_stderr; }
 
 bool ErrIsTerminal() { return own_stderr_tty; }
+
+Progress::Progress(std::string stage, bool enabled, std::string unit, double total)
+    : stage_(std::move(stage)),
+      unit_(std::move(unit)),
+      total_(total),
+      enabled_(enabled && own_stderr_tty),
+      start_(std::chrono::steady_clock::now()),
+      last_(start_) {}
+
+Progress::~Progress() {
+  if (shown_) std::fprintf(Err(), "\r\033[K");
+}
+
+void Progress::Count(double done) { Update(total_ > 0 ? done / total_ : 0); }
+
+void Progress::Update(double fraction) {
+  if (!enabled_) return;
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto now = std::chrono::steady_clock::now();
+  const double elapsed = std::chrono::duration<double>(now - start_).count();
+  if (elapsed < 1 || std::chrono::duration<double>(now - last_).count() < 0.1) return;
+  last_ = now;
+  shown_ = true;
+  fraction = std::min(std::max(fraction, 0.0), 1.0);
+  char counts[64] = "";
+  if (total_ > 0) {
+    std::snprintf(counts, sizeof counts, " (%.0f/%.0f %s)", fraction * total_, total_,
+                  unit_.c_str());
+  }
+  char left[48] = "";
+  if (fraction > 0.02) {
+    std::snprintf(left, sizeof left, ", about %.0f s left", elapsed * (1 - fraction) / fraction);
+  }
+  std::fprintf(Err(), "\r\033[K%s: %3.0f%%%s, %.0f s%s", stage_.c_str(), 100 * fraction, counts,
+               elapsed, left);
+  std::fflush(Err());
+}
 
 void Warn(const std::string& message) {
   std::fprintf(Err(), "iphong: warning: %s\n", OneLine(message).c_str());

@@ -4,6 +4,7 @@
 #include <matio.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -13,7 +14,9 @@
 
 #include "core/errors.h"
 
+#include "core/image_ops.h"
 #include "core/parallel.h"
+#include "io/capture.h"
 #include "io/dataset_text.h"
 #include "io/files.h"
 #include "io/json_reader.h"
@@ -89,18 +92,6 @@ nlohmann::json MaterialJson(const render::Scene& scene, const render::RenderOpti
   j["shininess"] = first.material.shininess;
   if (kd_uniform) j["kd"] = rgb(first.material.kd);
   return j;
-}
-
-// Datasets that say their integer images are sRGB-encoded (render.json) are linearized.
-bool DatasetIsSrgb(const fs::path& dir) {
-  if (!fs::exists(dir / "render.json")) return false;
-  const std::string path = (dir / "render.json").string();
-  const nlohmann::json document = JsonReader::Parse(ReadTextFile(path), path);
-  const JsonReader j(document, path);
-  const std::string encoding = j.String("encoding", "linear");
-  if (encoding != "linear" && encoding != "srgb")
-    j.Field("encoding").Fail("expected linear or srgb");
-  return encoding == "srgb";
 }
 
 // A MAT-file (level 5) is a 128-byte header and then data elements, each an 8-byte tag (type,
@@ -242,65 +233,208 @@ ImageF ReadNormalMat(const std::string& path, const std::string& variable) {
   return normals;
 }
 
-Dataset LoadDataset(const std::string& directory, const DatasetLoadOptions& options) {
+namespace {
+
+// A dataset without its images, plus what turns a decoded file into a working image.
+struct Prepared {
+  Dataset d;
+  PixelRect crop;  // width 0 = none
+  Mask file_mask;  // the mask at the files' resolution, cropped: where pixels are counted
+  bool srgb = false;
+  bool integer_files = true;  // saturation exists only for integer code values
+};
+
+Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options) {
   const fs::path dir(directory);
   std::error_code error;
   if (!fs::is_directory(dir, error)) {
     Fail(dir, fs::exists(dir, error) ? "not a folder (a dataset is a folder)" : "no such folder");
   }
   FinishInterruptedCommit(directory);  // an iphong render output cut off while committing
-  Dataset d;
+  Prepared p;
+  Dataset& d = p.d;
   d.directory = directory;
-  const fs::path list = dir / "filenames.txt";
-  d.filenames = ParseFilenames(ReadTextFile(list.string()), list.string());
-  const std::size_t k = d.filenames.size();
-  const fs::path directions = dir / "light_directions.txt";
-  d.light_directions =
-      ParseLightDirections(ReadTextFile(directions.string()), directions.string(), k, &d.warnings);
-  const fs::path intensities = dir / "light_intensities.txt";
-  if (fs::exists(intensities, error)) {
-    d.light_intensities =
-        ParseLightIntensities(ReadTextFile(intensities.string()), intensities.string(), k);
-  } else {
-    d.light_intensities.assign(k, Vec3d::Ones());
-  }
-  const fs::path material = dir / "material.json";
-  if (fs::exists(material, error)) {
-    d.material = ParseMaterialJson(ReadTextFile(material.string()), material.string());
+  d.files = FindCapture(directory, options.capture);
+  d.filenames = d.files.names;
+  d.light_directions = d.files.light_directions;
+  d.light_intensities = d.files.light_intensities;
+  d.warnings = d.files.warnings;
+  if (!d.files.material_path.empty()) {
+    d.material = ParseMaterialJson(ReadTextFile(d.files.material_path), d.files.material_path);
   }
 
   // The images' size from the first one's header, so the mask and the ground truth are checked
   // against it before anything large is read.
-  const fs::path first = dir / d.filenames[0];
+  const std::string& first = d.files.paths[0];
+  const bool have_first = options.load_images || fs::exists(first, error);
+  if (have_first) {
+    const StoredEncoding stored = ReadStoredEncoding(first);
+    const ImageHeader header = ReadImageHeader(first);
+    d.file_width = header.width;
+    d.file_height = header.height;
+    d.encoding = ChooseEncoding(d.files, options.capture, stored);
+    p.integer_files = !stored.is_float;
+  } else {
+    d.encoding = ChooseEncoding(d.files, options.capture, StoredEncoding{});
+  }
+  p.srgb = d.encoding.encoding == Encoding::kSrgb;
+  const CaptureOptions& capture = options.capture;
+  if (capture.crop.width > 0) {
+    p.crop = capture.crop;
+    if (have_first) {
+      if (std::string m = CheckRect(p.crop, d.file_width, d.file_height); !m.empty()) {
+        throw std::invalid_argument(first + ": " + m);
+      }
+    }
+  }
+  auto cut = [&](const Mask& m) { return p.crop.width > 0 ? CropMask(m, p.crop) : m; };
   int width = 0, height = 0;
-  if (options.load_images || fs::exists(first, error)) {
-    const ImageHeader header = ReadImageHeader(first.string());
-    width = header.width;
-    height = header.height;
+  if (have_first) {
+    TransformedSize(d.file_width, d.file_height, p.crop.width > 0 ? &p.crop : nullptr,
+                    capture.downscale, &width, &height);
+    if (width < 1 || height < 1) {
+      throw std::invalid_argument(first + ": " + SizeText(d.file_width, d.file_height) +
+                                  " is smaller than one pixel after --downscale " +
+                                  std::to_string(capture.downscale));
+    }
   }
 
-  const fs::path mask_path = dir / "mask.png";
-  if (fs::exists(mask_path, error)) {
-    d.mask = ReadMask(mask_path.string(), options.memory);
-    if (width > 0 && (d.mask.width != width || d.mask.height != height)) {
-      Fail(mask_path, "is " + SizeText(d.mask.width, d.mask.height) + ", the images are " +
-                          SizeText(width, height) + " (" + d.filenames[0] + ")");
+  if (!d.files.mask_path.empty()) {
+    const Mask file_mask = ReadMask(d.files.mask_path, options.memory);
+    if (have_first && (file_mask.width != d.file_width || file_mask.height != d.file_height)) {
+      Fail(d.files.mask_path, "is " + SizeText(file_mask.width, file_mask.height) +
+                                  ", the images are " + SizeText(d.file_width, d.file_height) +
+                                  " (" + d.filenames[0] + ")");
     }
-    if (d.mask.count() == 0) Fail(mask_path, "selects no pixel (all zero; nonzero = object)");
-  } else {
+    p.file_mask = cut(file_mask);
+    d.mask = DownscaleMask(p.file_mask, capture.downscale);
+    if (d.mask.count() == 0) {
+      Fail(d.files.mask_path, p.file_mask.count() == 0
+                                  ? "selects no pixel (all zero; nonzero = object)"
+                                  : "selects no pixel after --crop/--downscale");
+    }
+  } else if (have_first) {
+    p.file_mask = Mask(p.crop.width > 0 ? p.crop.width : d.file_width,
+                       p.crop.width > 0 ? p.crop.height : d.file_height, true);
     d.mask = Mask(width, height, true);
   }
 
+  if (options.load_ground_truth && !d.files.ground_truth_path.empty()) {
+    const std::string& truth = d.files.ground_truth_path;
+    if (truth.size() >= 4 && truth.compare(truth.size() - 4, 4, ".mat") == 0) {
+      d.normal_gt = ReadNormalMat(truth, "Normal_gt");
+    } else if (have_first) {
+      d.normal_gt = ParseNormalText(ReadTextFile(truth, std::uint64_t{8} << 30), truth,
+                                    d.file_width, d.file_height);
+    }
+    if (!d.normal_gt.pixels.empty()) {
+      if (have_first &&
+          (d.normal_gt.width != d.file_width || d.normal_gt.height != d.file_height)) {
+        Fail(truth, "is " + SizeText(d.normal_gt.width, d.normal_gt.height) + ", the images are " +
+                        SizeText(d.file_width, d.file_height));
+      }
+      CheckNormalMap(d.normal_gt, truth);
+      if (p.crop.width > 0) d.normal_gt = CropImage(d.normal_gt, p.crop);
+      d.normal_gt = DownscaleNormals(d.normal_gt, capture.downscale);
+    }
+  }
+  d.image_counts.assign(d.filenames.size(), {});
+  return p;
+}
+
+// Image j at the working size: decoded, cropped, counted, linearized, downscaled.
+ImageF ReadWorkingImage(const Prepared& p, std::size_t j, const std::string& reference,
+                        const DatasetLoadOptions& options, ImageCounts* counts) {
+  const Dataset& d = p.d;
+  const std::string& path = d.files.paths[j];
+  ImageF image = ReadDatasetImage(path, d.file_width, d.file_height, reference, options.memory);
+  if (p.crop.width > 0) image = CropImage(image, p.crop);
+  // Saturation is a property of the stored code values: counted before any averaging.
+  const bool integer = p.integer_files;
+  for (std::size_t q = 0; q < image.pixel_count(); ++q) {
+    if (!p.file_mask.inside[q]) continue;
+    const float* v = image.pixels.data() + 3 * q;
+    if (v[0] == 0 && v[1] == 0 && v[2] == 0) ++counts->black;
+    if (integer && (v[0] >= 1 || v[1] >= 1 || v[2] >= 1)) ++counts->saturated;
+  }
+  counts->pixels = p.file_mask.count();
+  if (p.srgb)
+    for (float& v : image.pixels) v = SrgbToLinear(v);
+  return DownscaleImage(image, options.capture.downscale);
+}
+
+}  // namespace
+
+std::string DescribeDataset(const Dataset& d) {
+  const CaptureFiles& f = d.files;
+  const std::size_t k = f.names.size();
+  auto base = [](const std::string& path) { return fs::path(path).filename().string(); };
+  std::string text = std::to_string(k) + " images (" + f.layout + " layout, " + f.order + ": " +
+                     (k == 1 ? f.names[0] : f.names.front() + " ... " + f.names.back()) + ")";
+  text += "; lights " + f.lights_path + " (" + f.lights_format + ")";
+  text += "; intensities " + f.intensities_source;
+  text +=
+      "; mask " + (f.mask_path.empty() ? std::string("none (the whole image)") : base(f.mask_path));
+  text += "; encoding " + std::string(d.encoding.encoding == Encoding::kSrgb ? "srgb" : "linear") +
+          " (" + d.encoding.reason + ")";
+  if (d.mask.width > 0 && (d.mask.width != d.file_width || d.mask.height != d.file_height)) {
+    text += "; " + SizeText(d.file_width, d.file_height) + " read as " +
+            SizeText(d.mask.width, d.mask.height);
+  }
+  text += "; ground truth " +
+          (f.ground_truth_path.empty() ? std::string("none") : base(f.ground_truth_path));
+  return text;
+}
+
+std::string DescribeImageCounts(const Dataset& d) {
+  std::size_t worst_saturated = 0, worst_black = 0, clipped_images = 0, black_images = 0;
+  double saturated_fraction = 0, black_fraction = 0;
+  for (std::size_t j = 0; j < d.image_counts.size(); ++j) {
+    const ImageCounts& c = d.image_counts[j];
+    if (c.pixels == 0) continue;
+    const double s = double(c.saturated) / c.pixels, b = double(c.black) / c.pixels;
+    clipped_images += s > 0.01;
+    black_images += b > 0.01;
+    if (s > saturated_fraction) saturated_fraction = s, worst_saturated = j;
+    if (b > black_fraction) black_fraction = b, worst_black = j;
+  }
+  std::string text;
+  char line[256];
+  if (clipped_images > 0) {
+    std::snprintf(line, sizeof line,
+                  "%zu of %zu images have more than 1%% of the mask clipped at the format's "
+                  "maximum (most: %s, %.1f%%); clipped values are left out of the fit",
+                  clipped_images, d.image_counts.size(), d.filenames[worst_saturated].c_str(),
+                  100 * saturated_fraction);
+    text = line;
+  }
+  if (black_images > 0) {
+    std::snprintf(line, sizeof line,
+                  "%zu of %zu images are black (0) on more than 1%% of the mask (most: %s, "
+                  "%.1f%%)",
+                  black_images, d.image_counts.size(), d.filenames[worst_black].c_str(),
+                  100 * black_fraction);
+    text += (text.empty() ? "" : "; ") + std::string(line);
+  }
+  return text;
+}
+
+Dataset LoadDataset(const std::string& directory, const DatasetLoadOptions& options) {
+  Prepared p = Prepare(directory, options);
+  Dataset& d = p.d;
   if (options.load_images) {
-    RequireMemory(options.memory, static_cast<double>(k) * width * height * 3 * sizeof(float),
+    const std::size_t k = d.filenames.size();
+    const int width = d.mask.width, height = d.mask.height;
+    RequireMemory(options.memory,
+                  static_cast<double>(k) * width * height * 3 * sizeof(float) +
+                      2.0 * d.file_width * d.file_height * 3 * sizeof(float),
                   directory + ": " + std::to_string(k) + " images of " + SizeText(width, height));
     d.images.resize(k);
     std::vector<std::string> errors(k);
     ParallelFor(0, k, 1, options.threads, [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i) {
-        const std::string path = (dir / d.filenames[i]).string();
         try {
-          d.images[i] = ReadDatasetImage(path, width, height, d.filenames[0], options.memory);
+          d.images[i] = ReadWorkingImage(p, i, d.filenames[0], options, &d.image_counts[i]);
         } catch (const std::exception& ex) {
           errors[i] = ex.what();
         }
@@ -308,32 +442,8 @@ Dataset LoadDataset(const std::string& directory, const DatasetLoadOptions& opti
     });
     for (const std::string& message : errors)
       if (!message.empty()) throw std::runtime_error(message);
-    if (DatasetIsSrgb(dir)) {
-      for (ImageF& image : d.images)
-        for (float& v : image.pixels) v = SrgbToLinear(v);
-    }
   }
-
-  if (options.load_ground_truth) {
-    fs::path truth;
-    if (fs::exists(dir / "Normal_gt.mat", error)) {
-      truth = dir / "Normal_gt.mat";
-      d.normal_gt = ReadNormalMat(truth.string(), "Normal_gt");
-    } else if (fs::exists(dir / "normal.txt", error) && d.mask.width > 0) {
-      truth = dir / "normal.txt";
-      d.normal_gt = ParseNormalText(ReadTextFile(truth.string(), std::uint64_t{8} << 30),
-                                    truth.string(), d.mask.width, d.mask.height);
-    }
-    if (!d.normal_gt.pixels.empty()) {
-      if (d.mask.width > 0 &&
-          (d.normal_gt.width != d.mask.width || d.normal_gt.height != d.mask.height)) {
-        Fail(truth, "is " + SizeText(d.normal_gt.width, d.normal_gt.height) + ", the images are " +
-                        SizeText(d.mask.width, d.mask.height));
-      }
-      CheckNormalMap(d.normal_gt, truth.string());
-    }
-  }
-  return d;
+  return std::move(p.d);
 }
 
 std::string CheckDatasetLights(const render::Scene& scene) {
@@ -407,38 +517,37 @@ void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const rende
 namespace iphong::io {
 
 ObservationSet LoadObservations(const std::string& directory, const DatasetLoadOptions& options) {
-  const fs::path dir(directory);
   DatasetLoadOptions meta_options = options;
   meta_options.load_images = false;
   ObservationSet set;
-  Dataset& d = set.dataset;
-  d = LoadDataset(directory, meta_options);
+  Prepared p = Prepare(directory, meta_options);
+  Dataset& d = p.d;
   const std::size_t k = d.filenames.size();
   if (d.mask.width == 0) {  // the first image was not there to size the whole-image mask
-    RequireRegularFile((dir / d.filenames[0]).string());
+    RequireRegularFile(d.files.paths[0]);
   }
   const int w = d.mask.width, h = d.mask.height;
   // The observations, plus one decoded image (and the decoder's buffer) per thread.
   const double threads = std::min<double>(ResolveThreads(options.threads), k);
-  RequireMemory(
-      options.memory,
-      (static_cast<double>(k) * d.mask.count() * 3 + threads * 2.0 * w * h * 4) * sizeof(float),
-      directory + ": " + std::to_string(k) + " images of " + SizeText(w, h));
+  RequireMemory(options.memory,
+                (static_cast<double>(k) * d.mask.count() * 3 +
+                 threads * 2.0 * d.file_width * d.file_height * 4) *
+                    sizeof(float),
+                directory + ": " + std::to_string(k) + " images of " + SizeText(w, h));
   solve::PhotometricData& data = set.observations;
   data = solve::ObservationLayout(w, h, d.mask, d.light_directions, d.light_intensities);
-  const bool srgb = DatasetIsSrgb(dir);
-  const std::string reference = fs::exists(dir / "mask.png") ? "mask.png" : d.filenames[0];
+  const std::string reference =
+      d.files.mask_path.empty() ? d.filenames[0] : fs::path(d.files.mask_path).filename().string();
   std::vector<std::string> errors(k);
+  std::atomic<std::size_t> decoded{0};
   ParallelFor(0, k, 1, options.threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t j = b; j < e; ++j) {
-      const std::string path = (dir / d.filenames[j]).string();
       try {
-        ImageF image = ReadDatasetImage(path, w, h, reference, options.memory);
-        if (srgb)
-          for (float& v : image.pixels) v = SrgbToLinear(v);
+        const ImageF image = ReadWorkingImage(p, j, reference, options, &d.image_counts[j]);
+        if (options.progress) options.progress(double(++decoded) / k);
         if (auto m = solve::GatherImage(data, static_cast<int>(j), image.pixels.data());
             !m.empty()) {
-          errors[j] = path + ": " + m;
+          errors[j] = d.files.paths[j] + ": " + m;
         }
       } catch (const std::exception& ex) {
         errors[j] = ex.what();
@@ -449,6 +558,7 @@ ObservationSet LoadObservations(const std::string& directory, const DatasetLoadO
   for (const std::string& error : errors)
     if (!error.empty()) throw std::runtime_error(error);
   if (auto m = data.Validate(); !m.empty()) throw std::runtime_error(directory + ": " + m);
+  set.dataset = std::move(p.d);
   return set;
 }
 

@@ -1,4 +1,6 @@
-// Photometric-stereo dataset directories in the DiLiGenT layout (SPEC.md):
+// Photometric-stereo datasets: the images of a capture under known lights, read from a folder in
+// any layout io/capture.h finds (DiLiGenT, UW, RTI .lp, a plain folder). The DiLiGenT layout
+// (SPEC.md), which iphong writes:
 //   filenames.txt            one image file name per line
 //   light_directions.txt     one "lx ly lz" per line (unit, surface → light, camera frame)
 //   light_intensities.txt    one "r g b" per line (absent = all ones)
@@ -8,11 +10,13 @@
 // iphong also writes normals.exr, depth.exr, albedo.exr and render.json (how it was rendered).
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "core/resources.h"
+#include "io/capture.h"
 #include "io/dataset_text.h"
 #include "io/output_folder.h"
 #include "io/scene_file.h"
@@ -22,8 +26,18 @@
 
 namespace iphong::io {
 
+// Per image, over the mask at the files' resolution: pixels whose stored value is the format's
+// maximum in some channel (clipped: the true value is unknown) and pixels zero in every channel.
+struct ImageCounts {
+  std::size_t pixels = 0, saturated = 0, black = 0;
+};
+
 struct Dataset {
   std::string directory;
+  CaptureFiles files;                     // what was found where
+  EncodingChoice encoding;                // how the image values were read
+  int file_width = 0, file_height = 0;    // the files' size, before --crop and --downscale
+  std::vector<ImageCounts> image_counts;  // per image, filled as the images are read
   std::vector<std::string> filenames;
   std::vector<ImageF> images;            // linear float RGB, one per light
   std::vector<Vec3d> light_directions;   // unit
@@ -38,11 +52,21 @@ struct Dataset {
 };
 
 struct DatasetLoadOptions {
+  CaptureOptions capture;  // light file, mask, encoding, crop, downscale
   bool load_images = true;
   bool load_ground_truth = true;
   int threads = 0;
   MemoryLimit memory;  // checked before the images are decoded
+  // Called with the fraction of images decoded, from the decoding threads (may be concurrent).
+  std::function<void(double)> progress;
 };
+
+// One line saying what was read: how many images, from which list or in which order, the light
+// file, the intensities, the mask, the encoding and why, the size after --crop/--downscale.
+std::string DescribeDataset(const Dataset& dataset);
+
+// "" or one line naming the images with clipped or black pixels (more than 1% of the mask).
+std::string DescribeImageCounts(const Dataset& dataset);
 
 // Reads a dataset directory. Throws std::runtime_error whose one-line message names the file
 // (and the line for text files): missing or short light files, NaN, zero intensities, image

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <stdexcept>
 
 #include "io/json_reader.h"
@@ -47,6 +48,7 @@ Vec3d Triple(const std::string& line, const std::string& source, int number) {
   const char* p = line.c_str();
   int count = 0;
   for (; count < 4; ++count) {
+    if (count > 0) p += std::strspn(p, " \t,");  // "1, 2, 3" as spreadsheets export it
     char* end = nullptr;
     const double value = std::strtod(p, &end);
     if (end == p) break;
@@ -81,41 +83,161 @@ std::vector<std::string> ParseFilenames(const std::string& text, const std::stri
 }
 
 std::vector<Vec3d> ParseTriples(const std::string& text, const std::string& source,
-                                std::size_t expected) {
+                                std::size_t expected, const std::string& count_source) {
   std::vector<Vec3d> triples;
   for (const auto& [number, line] : Lines(text)) {
     if (triples.size() == expected) {
       Fail(source,
-           "has more lines than the " + std::to_string(expected) + " images in filenames.txt",
+           "has more lines than the " + std::to_string(expected) + " images in " + count_source,
            number);
     }
     triples.push_back(Triple(line, source, number));
   }
   if (triples.size() != expected) {
     Fail(source, "has " + std::to_string(triples.size()) + " lines for " +
-                     std::to_string(expected) + " images in filenames.txt");
+                     std::to_string(expected) + " images in " + count_source);
   }
   return triples;
 }
 
-std::vector<Vec3d> ParseLightDirections(const std::string& text, const std::string& source,
-                                        std::size_t expected, std::vector<std::string>* warnings) {
-  std::vector<Vec3d> directions = ParseTriples(text, source, expected);
+namespace {
+
+// Unit directions (lengths off 1 by more than 1e-3 are reported), spanning three dimensions.
+void NormalizeDirections(std::vector<Vec3d>& directions, const std::string& source,
+                         std::vector<std::string>* warnings, int first_line) {
   for (std::size_t i = 0; i < directions.size(); ++i) {
     Vec3d& d = directions[i];
+    const int line = first_line + static_cast<int>(i);
     // Scaled first, so 1e308 components have a length instead of an infinite one.
     const double scale = d.cwiseAbs().maxCoeff();
-    if (!(scale > 0)) Fail(source, "zero light direction", static_cast<int>(i + 1));
+    if (!(scale > 0)) Fail(source, "zero light direction", line);
     const double norm = (d / scale).norm() * scale;
     if (std::abs(norm - 1) > 1e-3 && warnings) {
       char length[32];
       std::snprintf(length, sizeof length, "%.6g", norm);
-      warnings->push_back(source + ":" + std::to_string(i + 1) + ": light direction has length " +
+      warnings->push_back(source + ":" + std::to_string(line) + ": light direction has length " +
                           length + "; normalized");
     }
     d = (d / scale).normalized();
   }
   if (std::string m = solve::CheckLightSpan(directions); !m.empty()) Fail(source, m);
+}
+
+bool EndsWith(std::string text, const std::string& suffix) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text.size() >= suffix.size() &&
+         text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// The count a UW or RTI light file starts with: a line holding one non-negative integer only.
+bool CountLine(const std::string& line, std::size_t* count) {
+  const auto begin = line.find_first_not_of(" \t"), end = line.find_last_not_of(" \t");
+  const std::string token = line.substr(begin, end - begin + 1);
+  if (token.empty() || token.size() > 9 ||
+      token.find_first_not_of("0123456789") != std::string::npos) {
+    return false;
+  }
+  *count = std::stoul(token);
+  return true;
+}
+
+LightFile ParseAliceVisionJson(const std::string& text, const std::string& source,
+                               std::size_t max_lights) {
+  const nlohmann::json document = JsonReader::Parse(text, source);
+  const JsonReader root(document, source);
+  const JsonReader lights = root.Field("lights");
+  const std::size_t n = lights.Size();
+  if (n > max_lights) lights.Fail("more than " + std::to_string(max_lights) + " lights");
+  LightFile file;
+  file.format = "AliceVision JSON";
+  for (std::size_t i = 0; i < n; ++i) {
+    const JsonReader light = lights.At(i);
+    light.OnlyKeys({"lightId", "viewId", "type", "direction", "intensity"});
+    const std::string type = light.String("type", "directional");
+    if (type != "directional" && type != "directionnal" && type != "Directionnal") {
+      light.Field("type").Fail("only directional lights are read (got " + type + ")");
+    }
+    const Vec3d d = light.Field("direction").Vector3();
+    file.directions.push_back(Vec3d(d[0], -d[1], -d[2]));  // y down, z away → y up, z toward
+    const Vec3d e = light.Rgb("intensity", Vec3d::Ones());
+    if (!(e.array() > 0).all() || !(e.array() <= 1e30).all()) {
+      light.Field("intensity").Fail("must be > 0 and at most 1e30");
+    }
+    file.intensities.push_back(e);
+  }
+  if (file.directions.empty()) lights.Fail("no lights");
+  return file;
+}
+
+}  // namespace
+
+LightFile ParseLightFile(const std::string& text, const std::string& source, std::size_t expected,
+                         std::vector<std::string>* warnings, std::size_t max_lights) {
+  LightFile file;
+  int first_line = 1;
+  if (EndsWith(source, ".json")) {
+    file = ParseAliceVisionJson(text, source, max_lights);
+  } else {
+    auto lines = Lines(text);
+    if (lines.empty()) Fail(source, "is empty (one light direction per line expected)");
+    std::size_t count = 0;
+    const bool counted = CountLine(lines.front().second, &count);
+    if (counted) {
+      if (lines.size() - 1 != count) {
+        Fail(source,
+             "says " + std::to_string(count) + " lights on its first line but lists " +
+                 std::to_string(lines.size() - 1),
+             lines.front().first);
+      }
+      lines.erase(lines.begin());
+    }
+    if (lines.size() > max_lights) {
+      Fail(source, "lists more than " + std::to_string(max_lights) + " lights");
+    }
+    if (!lines.empty()) first_line = lines.front().first;
+    // RTI: "name lx ly lz" — a first field that is not a number.
+    const std::string& probe = lines.empty() ? std::string() : lines.front().second;
+    char* end = nullptr;
+    const char* start = probe.c_str() + probe.find_first_not_of(" \t");
+    std::strtod(start, &end);
+    const bool named = !probe.empty() && end == start;
+    file.format = named ? "RTI .lp" : counted ? "count + directions" : "directions";
+    for (const auto& [number, line] : lines) {
+      if (line.find('\0') != std::string::npos) Fail(source, "not a text file", number);
+      if (!named) {
+        file.directions.push_back(Triple(line, source, number));
+        continue;
+      }
+      // The last three fields are the direction; everything before them is the file name.
+      std::vector<std::size_t> starts;
+      for (std::size_t at = line.find_first_not_of(" \t"); at != std::string::npos;
+           at = line.find_first_not_of(" \t", line.find_first_of(" \t", at))) {
+        starts.push_back(at);
+      }
+      if (starts.size() < 4) {
+        Fail(source, "expected 'filename lx ly lz', got '" + Shown(line) + "'", number);
+      }
+      std::string name = line.substr(0, starts[starts.size() - 3]);
+      name.erase(name.find_last_not_of(" \t") + 1);
+      for (unsigned char c : name) {
+        if (c < 32) Fail(source, "an image name with control characters", number);
+      }
+      file.image_names.push_back(name);
+      file.directions.push_back(Triple(line.substr(starts[starts.size() - 3]), source, number));
+    }
+  }
+  if (expected > 0 && file.directions.size() != expected) {
+    Fail(source, "has " + std::to_string(file.directions.size()) + " lights for " +
+                     std::to_string(expected) + " images");
+  }
+  NormalizeDirections(file.directions, source, warnings, first_line);
+  return file;
+}
+
+std::vector<Vec3d> ParseLightDirections(const std::string& text, const std::string& source,
+                                        std::size_t expected, std::vector<std::string>* warnings) {
+  std::vector<Vec3d> directions = ParseTriples(text, source, expected);
+  NormalizeDirections(directions, source, warnings, 1);
   return directions;
 }
 

@@ -26,9 +26,30 @@ struct DatasetMaterial {
 std::vector<std::string> ParseFilenames(const std::string& text, const std::string& source,
                                         std::size_t max_images = 100000);
 
-// `expected` lines of three finite numbers.
+// `expected` lines of three finite numbers (separated by spaces, tabs or commas); a count that
+// differs is reported against `count_source`, where the expected count came from.
 std::vector<Vec3d> ParseTriples(const std::string& text, const std::string& source,
-                                std::size_t expected);
+                                std::size_t expected,
+                                const std::string& count_source = "filenames.txt");
+
+// A light file in any of the formats capture tools write, told apart by extension and content:
+//   "directions"          DiLiGenT's light_directions.txt: one "lx ly lz" per line;
+//   "count + directions"  UW/CSE455 lights.txt: a line with the count, then the directions;
+//   "RTI .lp"             RTIBuilder, Relight, RTIViewer: a count line, then "filename lx ly lz"
+//                         (the name may hold spaces; the last three fields are the direction);
+//   "AliceVision JSON"    {"lights": [{"direction": [x, y, z], "intensity": [r, g, b]}, ...]} in
+//                         AliceVision's camera frame (x right, y down, z away from the camera),
+//                         turned into iphong's (x right, y up, z toward the viewer).
+// All but the JSON share iphong's frame. Directions are normalized as ParseLightDirections does.
+struct LightFile {
+  std::string format;
+  std::vector<Vec3d> directions;
+  std::vector<std::string> image_names;  // RTI .lp: the image of each light, as written
+  std::vector<Vec3d> intensities;        // AliceVision JSON: RGB per light; empty otherwise
+};
+// `expected` = 0 takes any count (the images are then matched to the lights by the caller).
+LightFile ParseLightFile(const std::string& text, const std::string& source, std::size_t expected,
+                         std::vector<std::string>* warnings, std::size_t max_lights = 100000);
 
 // Light directions: non-zero, normalized (lengths off 1 by more than 1e-3 are reported in
 // `warnings`). Intensities: each channel in (0, 1e30].

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 
@@ -136,6 +137,79 @@ ImageF ReadImage(const std::string& path, const MemoryLimit& memory,
   }
   in->close();
   return image;
+}
+
+namespace {
+
+// The chunks a PNG holds before its first IDAT that concern the encoding. Each chunk is a 4-byte
+// big-endian length, a 4-byte type, the data and a CRC.
+void ReadPngStatement(const std::string& path, StoredEncoding* e) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return;
+  struct Close {
+    std::FILE* f;
+    ~Close() { std::fclose(f); }
+  } closer{f};
+  unsigned char signature[8];
+  if (std::fread(signature, 1, 8, f) != 8) return;
+  for (int chunk = 0; chunk < 64; ++chunk) {
+    unsigned char head[8];
+    if (std::fread(head, 1, 8, f) != 8) return;
+    const std::uint32_t length = (std::uint32_t(head[0]) << 24) | (std::uint32_t(head[1]) << 16) |
+                                 (std::uint32_t(head[2]) << 8) | head[3];
+    const std::string type(reinterpret_cast<const char*>(head + 4), 4);
+    if (type == "IDAT" || type == "IEND") return;
+    if (type == "sRGB" || type == "iCCP") {
+      // An ICC profile in a PNG is a display profile (sRGB, Adobe RGB, Display P3): all encode
+      // with a curve close to sRGB's.
+      e->stated = true;
+      e->encoding = Encoding::kSrgb;
+      e->statement = type == "sRGB" ? "sRGB chunk" : "ICC profile";
+      return;
+    }
+    if (type == "gAMA" && length == 4) {
+      unsigned char g[4];
+      if (std::fread(g, 1, 4, f) != 4) return;
+      const double gamma = ((std::uint32_t(g[0]) << 24) | (std::uint32_t(g[1]) << 16) |
+                            (std::uint32_t(g[2]) << 8) | g[3]) /
+                           1e5;
+      e->stated = true;
+      // gAMA stores the encoding exponent: 1 is linear, 1/2.2 is what sRGB approximates.
+      e->encoding = std::abs(gamma - 1) < 0.05 ? Encoding::kLinear : Encoding::kSrgb;
+      char text[32];
+      std::snprintf(text, sizeof text, "gAMA %.5g", gamma);
+      e->statement = text;
+      return;
+    }
+    if (std::fseek(f, static_cast<long>(length) + 4, SEEK_CUR) != 0) return;
+  }
+}
+
+}  // namespace
+
+StoredEncoding ReadStoredEncoding(const std::string& path) {
+  ImageHeader header;
+  auto in = OpenChecked(path, &header);
+  const OIIO::ImageSpec& spec = in->spec();
+  StoredEncoding e;
+  e.format = in->format_name();
+  e.is_float = spec.format.is_floating_point();
+  e.bits = spec.get_int_attribute("oiio:BitsPerSample", static_cast<int>(spec.format.size()) * 8);
+  in->close();
+  if (e.is_float) return e;
+  if (e.format == "jpeg") {
+    e.stated = true;
+    e.encoding = Encoding::kSrgb;
+    e.statement = "JPEG";
+  } else if (e.format == "png") {
+    ReadPngStatement(path, &e);
+  }
+  if (!e.stated && spec.get_int_attribute("Exif:ColorSpace", 0) == 1) {
+    e.stated = true;
+    e.encoding = Encoding::kSrgb;
+    e.statement = "Exif ColorSpace sRGB";
+  }
+  return e;
 }
 
 Mask ReadMask(const std::string& path, const MemoryLimit& memory) {

@@ -46,6 +46,20 @@ ImageHeader ReadImageHeader(const std::string& path);
 ImageF ReadImage(const std::string& path, const MemoryLimit& memory = {},
                  const std::function<void(const ImageHeader&)>& check = {});
 
+// How a file stores its values, and what it states about their encoding. Formats that state one:
+// JPEG (display-encoded, sRGB, by the format's own convention), PNG with an sRGB, iCCP or gAMA
+// chunk, any file with an Exif ColorSpace tag of sRGB. OpenImageIO reports "sRGB" for every PNG,
+// chunk or not, so PNG chunks are read here from the file itself.
+struct StoredEncoding {
+  int bits = 8;           // per channel as stored
+  bool is_float = false;  // half or float samples
+  std::string format;     // OpenImageIO's name: "png", "jpeg", "targa", "openexr", ...
+  bool stated = false;    // the file states its encoding ...
+  Encoding encoding = Encoding::kLinear;  // ... as this
+  std::string statement;  // how: "sRGB chunk", "gAMA 0.45455", "JPEG", "Exif ColorSpace sRGB"
+};
+StoredEncoding ReadStoredEncoding(const std::string& path);
+
 // A mask picture: a pixel is inside where any of its first three channels is non-zero.
 Mask ReadMask(const std::string& path, const MemoryLimit& memory = {});
 

@@ -129,8 +129,12 @@ def empty_filenames(ds):
 
 
 def missing_filenames(ds):
+    # Without filenames.txt the folder's images are paired with the lights in natural order,
+    # so an image too few is a count mismatch naming what was found.
     (ds / "filenames.txt").unlink()
-    return 1, r"no such file", "ds/filenames.txt"
+    (ds / "002.png").unlink()
+    return 1, r"has 12 lights, but .* holds 11 images \(001\.png \.\.\. 012\.png\)", \
+        "ds/light_directions.txt"
 
 
 def missing_image(ds):

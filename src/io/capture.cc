@@ -1,0 +1,321 @@
+#include "io/capture.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <set>
+#include <stdexcept>
+
+#include "io/dataset_text.h"
+#include "io/files.h"
+#include "io/json_reader.h"
+
+namespace iphong::io {
+namespace fs = std::filesystem;
+namespace {
+
+[[noreturn]] void Fail(const fs::path& file, const std::string& message) {
+  throw std::runtime_error(file.string() + ": " + message);
+}
+
+std::string Lower(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
+// Present under that name: a FIFO or a folder named like a light file is then refused by its
+// reader, not skipped as if absent.
+bool Exists(const fs::path& path) {
+  std::error_code error;
+  return fs::exists(path, error);
+}
+
+// The regular files of a folder, in natural order. Hidden files (iphong's staging and manifest
+// among them) are not part of a capture.
+std::vector<std::string> FolderFiles(const fs::path& dir) {
+  std::vector<std::string> names;
+  std::error_code error;
+  for (fs::directory_iterator it(dir, error), end; !error && it != end; it.increment(error)) {
+    const std::string name = it->path().filename().string();
+    if (name.empty() || name[0] == '.') continue;
+    std::error_code status_error;
+    if (!it->is_regular_file(status_error)) continue;
+    names.push_back(name);
+    if (names.size() > 1000000) Fail(dir, "holds more than a million files; not a capture folder");
+  }
+  if (error) Fail(dir, "cannot list the folder: " + error.message());
+  std::sort(names.begin(), names.end(), NaturalLess);
+  return names;
+}
+
+std::string Stem(const std::string& name) {
+  const std::size_t dot = name.rfind('.');
+  return dot == std::string::npos ? name : name.substr(0, dot);
+}
+
+// 0: "mask", 1: "<x>.mask", "<x>_mask", "<x>-mask"; -1: not a mask's name.
+int MaskRank(const std::string& name) {
+  if (!HasImageExtension(name)) return -1;
+  const std::string stem = Lower(Stem(name));
+  if (stem == "mask") return 0;
+  for (const char* suffix : {".mask", "_mask", "-mask"}) {
+    const std::string s(suffix);
+    if (stem.size() > s.size() && stem.compare(stem.size() - s.size(), s.size(), s) == 0) return 1;
+  }
+  return -1;
+}
+
+// Files of a capture folder that are not light images: ground truth and what iphong writes.
+bool IsCompanionImage(const std::string& name) {
+  static const std::set<std::string> kStems = {"normal_gt", "normals",   "normal",   "depth",
+                                               "albedo",    "residual",  "specular", "error",
+                                               "height",    "ambiguity", "clusters", "thumbnail"};
+  return MaskRank(name) >= 0 || kStems.count(Lower(Stem(name))) > 0;
+}
+
+// A text file that names images (one per line), not numbers.
+bool ListsImages(const fs::path& file) {
+  if (!Exists(file)) return false;
+  const std::string text = ReadTextFile(file.string());
+  const std::size_t start = text.find_first_not_of(" \t\r\n\xEF\xBB\xBF");
+  if (start == std::string::npos) return false;
+  std::string first = text.substr(start, text.find_first_of("\r\n", start) - start);
+  first.erase(first.find_last_not_of(" \t") + 1);
+  return HasImageExtension(first);
+}
+
+// The one file in `names` with extension `ext` (lower case, with the dot), or "".
+std::string OnlyWithExtension(const std::vector<std::string>& names, const std::string& ext,
+                              const fs::path& dir) {
+  std::string found;
+  for (const std::string& n : names) {
+    if (Lower(fs::path(n).extension().string()) != ext) continue;
+    if (!found.empty()) {
+      Fail(dir, "holds several " + ext + " files (" + found + ", " + n +
+                    "); name the light file with --lights");
+    }
+    found = n;
+  }
+  return found;
+}
+
+fs::path FindLightFile(const fs::path& dir, const std::vector<std::string>& files) {
+  for (const char* name : {"light_directions.txt", "lights.txt", "lights.json"})
+    if (Exists(dir / name)) return dir / name;
+  if (std::string lp = OnlyWithExtension(files, ".lp", dir); !lp.empty()) return dir / lp;
+  const fs::path parent = fs::absolute(dir).lexically_normal().parent_path();
+  for (const char* name : {"lights.txt", "light_directions.txt"})
+    if (Exists(parent / name)) return (dir / ".." / name).lexically_normal();
+  std::vector<std::string> parent_files;
+  std::error_code error;
+  for (fs::directory_iterator it(parent, error), end; !error && it != end; it.increment(error)) {
+    if (Lower(it->path().extension().string()) == ".lp") {
+      parent_files.push_back(it->path().filename().string());
+    }
+    if (parent_files.size() > 1) break;
+  }
+  if (parent_files.size() == 1) return (dir / ".." / parent_files[0]).lexically_normal();
+  Fail(dir,
+       "no light directions: found no light_directions.txt, lights.txt, lights.json or .lp "
+       "file here or in the parent folder; name one with --lights FILE");
+}
+
+// An image a .lp names: as written relative to the .lp's folder or the capture's, else by its
+// base name there (RTIBuilder writes absolute Windows paths of the machine it ran on).
+fs::path ResolveLpImage(const std::string& name, const fs::path& lp, const fs::path& dir) {
+  std::string base = name;
+  if (const std::size_t cut = base.find_last_of("/\\"); cut != std::string::npos) {
+    base = base.substr(cut + 1);
+  }
+  for (const fs::path& candidate :
+       {lp.parent_path() / name, dir / name, lp.parent_path() / base, dir / base}) {
+    if (Exists(candidate)) return candidate.lexically_normal();
+  }
+  Fail(lp, "names " + name + ", which is in neither " + lp.parent_path().string() + " nor " +
+               dir.string());
+}
+
+std::string Range(const std::vector<std::string>& names) {
+  if (names.empty()) return "none";
+  if (names.size() == 1) return names[0];
+  return names.front() + (names.size() == 2 ? ", " : " ... ") + names.back();
+}
+
+}  // namespace
+
+bool NaturalLess(const std::string& a, const std::string& b) {
+  std::size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    const bool da = std::isdigit(static_cast<unsigned char>(a[i]));
+    const bool db = std::isdigit(static_cast<unsigned char>(b[j]));
+    if (da && db) {
+      std::size_t ei = i, ej = j;
+      while (ei < a.size() && std::isdigit(static_cast<unsigned char>(a[ei]))) ++ei;
+      while (ej < b.size() && std::isdigit(static_cast<unsigned char>(b[ej]))) ++ej;
+      std::size_t si = i, sj = j;  // leading zeros do not change the number
+      while (si + 1 < ei && a[si] == '0') ++si;
+      while (sj + 1 < ej && b[sj] == '0') ++sj;
+      if (ei - si != ej - sj) return ei - si < ej - sj;
+      if (const int c = a.compare(si, ei - si, b, sj, ej - sj); c != 0) return c < 0;
+      i = ei;
+      j = ej;
+      continue;
+    }
+    const char ca = static_cast<char>(std::tolower(static_cast<unsigned char>(a[i])));
+    const char cb = static_cast<char>(std::tolower(static_cast<unsigned char>(b[j])));
+    if (ca != cb) return ca < cb;
+    ++i;
+    ++j;
+  }
+  if (a.size() - i != b.size() - j) return a.size() - i < b.size() - j;
+  return a < b;  // equal up to case and zeros: any fixed order
+}
+
+bool HasImageExtension(const std::string& name) {
+  static const std::set<std::string> kExtensions = {
+      ".png", ".jpg", ".jpeg", ".tif",  ".tiff", ".tga", ".exr", ".bmp", ".ppm",
+      ".pgm", ".pnm", ".hdr",  ".webp", ".jp2",  ".dpx", ".pfm", ".sgi", ".rgb"};
+  return kExtensions.count(Lower(fs::path(name).extension().string())) > 0;
+}
+
+std::string CaptureOptions::Check() const {
+  if (encoding != "auto" && encoding != "linear" && encoding != "srgb") {
+    return "encoding must be auto, linear or srgb (got " + encoding + ")";
+  }
+  if (downscale < 1 || downscale > 64) return "downscale must be 1 to 64";
+  if (crop.width != 0 || crop.height != 0 || crop.x != 0 || crop.y != 0) {
+    if (crop.width <= 0 || crop.height <= 0 || crop.x < 0 || crop.y < 0) {
+      return "crop must be x,y,w,h with x, y >= 0 and w, h > 0";
+    }
+  }
+  return "";
+}
+
+CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& options) {
+  if (std::string m = options.Check(); !m.empty()) throw std::invalid_argument(m);
+  const fs::path dir(directory);
+  CaptureFiles c;
+  c.directory = directory;
+  const std::vector<std::string> files = FolderFiles(dir);
+
+  // The images, and the lights when the list gives them.
+  std::vector<std::string> lp_names;
+  fs::path light_file = options.lights.empty() ? fs::path() : fs::path(options.lights);
+  if (Exists(dir / "filenames.txt")) {
+    c.layout = "DiLiGenT";
+    const fs::path list = dir / "filenames.txt";
+    c.names = ParseFilenames(ReadTextFile(list.string()), list.string());
+    c.order = "filenames.txt";
+    if (light_file.empty()) light_file = dir / "light_directions.txt";
+  } else {
+    if (light_file.empty()) light_file = FindLightFile(dir, files);
+    fs::path list;
+    for (const std::string& name : {dir.filename().string() + ".txt", std::string("images.txt")})
+      if (list.empty() && ListsImages(dir / name)) list = dir / name;
+    if (Lower(light_file.extension().string()) == ".lp") {
+      c.layout = "RTI .lp";
+    } else if (!list.empty()) {
+      c.layout = "listed";
+      c.names = ParseFilenames(ReadTextFile(list.string()), list.string());
+      c.order = list.filename().string();
+    } else {
+      c.layout = "folder";
+      for (const std::string& name : files)
+        if (HasImageExtension(name) && !IsCompanionImage(name)) c.names.push_back(name);
+      c.order = "natural order";
+      if (c.names.empty()) Fail(dir, "holds no image files (and no filenames.txt)");
+    }
+  }
+
+  // The light directions.
+  c.lights_path = light_file.string();
+  std::vector<std::string>* warnings = &c.warnings;
+  if (c.layout == "DiLiGenT" && options.lights.empty()) {
+    c.light_directions =
+        ParseLightDirections(ReadTextFile(c.lights_path), c.lights_path, c.names.size(), warnings);
+    c.lights_format = "directions";
+  } else {
+    LightFile lights = ParseLightFile(ReadTextFile(c.lights_path), c.lights_path, 0, warnings);
+    c.lights_format = lights.format;
+    c.light_directions = std::move(lights.directions);
+    if (!lights.intensities.empty()) {
+      c.light_intensities = std::move(lights.intensities);
+      c.intensities_source = c.lights_path;
+    }
+    if (!lights.image_names.empty() && c.names.empty()) {  // RTI: the .lp names the images
+      c.names = lights.image_names;
+      c.order = light_file.filename().string();
+      for (const std::string& name : c.names) {
+        c.paths.push_back(ResolveLpImage(name, light_file, dir).string());
+      }
+    }
+    if (c.names.size() != c.light_directions.size()) {
+      Fail(c.lights_path, "has " + std::to_string(c.light_directions.size()) + " lights, but " +
+                              directory + " holds " + std::to_string(c.names.size()) + " images (" +
+                              Range(c.names) +
+                              "); list the images in filenames.txt, in light order");
+    }
+  }
+  if (c.paths.empty()) {
+    for (const std::string& name : c.names) c.paths.push_back((dir / name).string());
+  }
+
+  // Intensities.
+  fs::path intensities = options.intensities;
+  if (intensities.empty() && Exists(dir / "light_intensities.txt")) {
+    intensities = dir / "light_intensities.txt";
+  }
+  if (!intensities.empty()) {
+    c.light_intensities = ParseLightIntensities(ReadTextFile(intensities.string()),
+                                                intensities.string(), c.names.size());
+    c.intensities_source = intensities.string();
+  } else if (c.light_intensities.empty()) {
+    c.light_intensities.assign(c.names.size(), Vec3d::Ones());
+    c.intensities_source = "all 1 (no light_intensities.txt)";
+  }
+
+  // Mask.
+  if (!options.mask.empty()) {
+    c.mask_path = options.mask;
+  } else if (Exists(dir / "mask.png")) {
+    c.mask_path = (dir / "mask.png").string();
+  } else {
+    int best = 2;
+    for (const std::string& name : files) {
+      const int rank = MaskRank(name);
+      if (rank >= 0 && rank < best) {
+        best = rank;
+        c.mask_path = (dir / name).string();
+      }
+    }
+  }
+
+  for (const char* name : {"Normal_gt.mat", "normal.txt"}) {
+    if (c.ground_truth_path.empty() && Exists(dir / name))
+      c.ground_truth_path = (dir / name).string();
+  }
+  if (Exists(dir / "material.json")) c.material_path = (dir / "material.json").string();
+  if (Exists(dir / "render.json")) c.render_json = (dir / "render.json").string();
+  return c;
+}
+
+EncodingChoice ChooseEncoding(const CaptureFiles& files, const CaptureOptions& options,
+                              const StoredEncoding& first) {
+  if (options.encoding == "linear") return {Encoding::kLinear, "--encoding linear"};
+  if (options.encoding == "srgb") return {Encoding::kSrgb, "--encoding srgb"};
+  if (!files.render_json.empty()) {
+    const std::string text = ReadTextFile(files.render_json);
+    const nlohmann::json document = JsonReader::Parse(text, files.render_json);
+    const JsonReader j(document, files.render_json);
+    const std::string encoding = j.String("encoding", "linear");
+    if (encoding != "linear" && encoding != "srgb") {
+      j.Field("encoding").Fail("expected linear or srgb");
+    }
+    return {encoding == "srgb" ? Encoding::kSrgb : Encoding::kLinear, "render.json says so"};
+  }
+  const std::string what = std::to_string(first.bits) + "-bit " + first.format;
+  if (first.is_float) return {Encoding::kLinear, what + " (float)"};
+  if (first.stated) return {first.encoding, what + " states it (" + first.statement + ")"};
+  return {Encoding::kLinear, what + " states no colour space; --encoding srgb if display-encoded"};
+}
+
+}  // namespace iphong::io

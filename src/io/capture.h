@@ -1,0 +1,78 @@
+// Finding a capture's files in a folder, whichever tool wrote it. Each layout has its reader; all
+// of them produce one CaptureFiles, from which LoadDataset (io/dataset.h) reads the images.
+//
+// Layouts, tried in this order:
+//   DiLiGenT  filenames.txt names the images; light_directions.txt, light_intensities.txt,
+//             mask.png, Normal_gt.mat (or normal.txt), material.json beside it.
+//   RTI       a .lp file (RTIBuilder, Relight, RTIViewer) names the images and their lights.
+//   listed    a text file naming the images, one per line: <folder>.txt or images.txt (UW).
+//   folder    every image file in the folder, in natural order ("cat.2" before "cat.10"; a
+//             plain `ls` puts cat.10 first and pairs every image with the wrong light).
+// The light file, unless named: light_directions.txt, lights.txt, lights.json or the one .lp in
+// the folder; then lights.txt, light_directions.txt or the one .lp in the parent folder (UW
+// keeps one lights.txt beside its objects). Any format of ParseLightFile (io/dataset_text.h).
+// Intensities: light_intensities.txt, else the light file's (AliceVision JSON), else all 1.
+// The mask, unless named: mask.png, then mask.* , <name>.mask.*, <name>_mask.* (an image file
+// whose name without extension is "mask" or ends in ".mask", "_mask" or "-mask"); none = the
+// whole image. Ground truth: Normal_gt.mat or normal.txt.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/image_ops.h"
+#include "core/types.h"
+#include "io/image_io.h"
+
+namespace iphong::io {
+
+struct CaptureOptions {
+  std::string lights;             // a light file; "" = find one
+  std::string intensities;        // "r g b" per light; "" = find one
+  std::string mask;               // a mask picture; "" = find one
+  std::string encoding = "auto";  // "auto" (what the files say, else linear), "linear", "srgb"
+  PixelRect crop;                 // in the files' pixels, applied first; width 0 = none
+  int downscale = 1;              // then area averaging by this factor
+
+  std::string Check() const;  // "" or what is wrong
+};
+
+struct CaptureFiles {
+  std::string directory;
+  std::string layout;              // "DiLiGenT", "RTI .lp", "listed", "folder"
+  std::vector<std::string> names;  // each image as listed or found
+  std::vector<std::string> paths;  // each image's path
+  std::string order;               // how the order was decided
+  std::string lights_path, lights_format;
+  std::vector<Vec3d> light_directions;   // unit, camera frame (SPEC.md)
+  std::vector<Vec3d> light_intensities;  // RGB
+  std::string intensities_source;
+  std::string mask_path;          // "" = the whole image
+  std::string ground_truth_path;  // "" = none
+  std::string material_path;      // "" = none
+  std::string render_json;        // iphong's own render.json, which states the encoding
+  std::vector<std::string> warnings;
+};
+
+// Throws std::runtime_error naming the file (and line) that is missing or wrong: no images, no
+// light file, counts that differ (with the names found), an image a .lp names that is not there.
+CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& options);
+
+// The encoding the images are read with, and why: --encoding when given; iphong's render.json;
+// linear for float files; what the first image states (StoredEncoding); linear otherwise — the
+// raw data of a camera or a benchmark (DiLiGenT's 8-bit crops, UW's TGA files) is linear more
+// often than not, and on UW's matte gray sphere linear gives 5.1° where sRGB gives 16.4°.
+struct EncodingChoice {
+  Encoding encoding = Encoding::kLinear;
+  std::string reason;
+};
+EncodingChoice ChooseEncoding(const CaptureFiles& files, const CaptureOptions& options,
+                              const StoredEncoding& first_image);
+
+// "a" before "b", "img2" before "img10" (digit runs compare as numbers), case folded.
+bool NaturalLess(const std::string& a, const std::string& b);
+
+// True for the extensions of the image formats iphong reads from capture folders.
+bool HasImageExtension(const std::string& name);
+
+}  // namespace iphong::io
