@@ -51,11 +51,23 @@ def render(scene, per_light=False, max_memory_gb=None):
     return _core._render_file(_os.fsdecode(scene), per_light, max_memory_gb)
 
 
-def load_dataset(directory, max_memory_gb=None):
-    """Read a dataset directory (DiLiGenT layout) into numpy arrays; see _core.load_dataset."""
-    if not isinstance(directory, (str, bytes, _os.PathLike)):
-        raise TypeError(f"directory: expected a path, got {type(directory).__name__}")
-    return _core.load_dataset(_os.fsdecode(directory), max_memory_gb)
+def _path(value, what):
+    if not isinstance(value, (str, bytes, _os.PathLike)):
+        raise TypeError(f"{what}: expected a path, got {type(value).__name__}")
+    return _os.fsdecode(value)
+
+
+def load_dataset(directory, max_memory_gb=None, *, lights=None, intensities=None, mask=None,
+                 encoding="auto", crop=None, downscale=1):
+    """Read a capture folder into numpy arrays; see _core.load_dataset."""
+    files = {name: "" if value is None else _path(value, name)
+             for name, value in (("lights", lights), ("intensities", intensities), ("mask", mask))}
+    if not isinstance(encoding, str):
+        raise TypeError(f"encoding: expected 'auto', 'linear' or 'srgb', got {type(encoding).__name__}")
+    if isinstance(downscale, bool) or not isinstance(downscale, int):
+        raise TypeError(f"downscale: expected a whole number, got {type(downscale).__name__}")
+    return _core.load_dataset(_path(directory, "directory"), max_memory_gb, encoding=encoding,
+                              crop=crop, downscale=downscale, **files)
 
 
 load_dataset.__doc__ = _core.load_dataset.__doc__

@@ -102,6 +102,22 @@ fs::path FindLightFile(const fs::path& dir, const std::vector<std::string>& file
   for (const char* name : {"light_directions.txt", "lights.txt", "lights.json"})
     if (Exists(dir / name)) return dir / name;
   if (std::string lp = OnlyWithExtension(files, ".lp", dir); !lp.empty()) return dir / lp;
+  // RTIBuilder keeps its .lp in a subfolder (assembly-files/) beside the images.
+  std::vector<fs::path> nested;
+  std::error_code list_error;
+  for (fs::directory_iterator it(dir, list_error), end; !list_error && it != end;
+       it.increment(list_error)) {
+    std::error_code status_error;
+    if (!it->is_directory(status_error) || it->path().filename().string()[0] == '.') continue;
+    for (const std::string& name : FolderFiles(it->path())) {
+      if (Lower(fs::path(name).extension().string()) == ".lp") nested.push_back(it->path() / name);
+    }
+  }
+  if (nested.size() > 1) {
+    Fail(dir, "its subfolders hold several .lp files (" + nested[0].string() + ", " +
+                  nested[1].string() + "); name the light file with --lights");
+  }
+  if (nested.size() == 1) return nested[0];
   const fs::path parent = fs::absolute(dir).lexically_normal().parent_path();
   for (const char* name : {"lights.txt", "light_directions.txt"})
     if (Exists(parent / name)) return (dir / ".." / name).lexically_normal();
@@ -315,7 +331,9 @@ EncodingChoice ChooseEncoding(const CaptureFiles& files, const CaptureOptions& o
   const std::string what = std::to_string(first.bits) + "-bit " + first.format;
   if (first.is_float) return {Encoding::kLinear, what + " (float)"};
   if (first.stated) return {first.encoding, what + " states it (" + first.statement + ")"};
-  return {Encoding::kLinear, what + " states no colour space; --encoding srgb if display-encoded"};
+  // 16-bit files are raw camera data far more often than pictures made for a screen.
+  return {Encoding::kLinear, what + " states no colour space" +
+                                 (first.bits <= 8 ? "; --encoding srgb if display-encoded" : "")};
 }
 
 }  // namespace iphong::io

@@ -9,12 +9,13 @@
 //   folder    every image file in the folder, in natural order ("cat.2" before "cat.10"; a
 //             plain `ls` puts cat.10 first and pairs every image with the wrong light).
 // The light file, unless named: light_directions.txt, lights.txt, lights.json or the one .lp in
-// the folder; then lights.txt, light_directions.txt or the one .lp in the parent folder (UW
-// keeps one lights.txt beside its objects). Any format of ParseLightFile (io/dataset_text.h).
-// Intensities: light_intensities.txt, else the light file's (AliceVision JSON), else all 1.
-// The mask, unless named: mask.png, then mask.* , <name>.mask.*, <name>_mask.* (an image file
-// whose name without extension is "mask" or ends in ".mask", "_mask" or "-mask"); none = the
-// whole image. Ground truth: Normal_gt.mat or normal.txt.
+// the folder; the one .lp in its subfolders (RTIBuilder's assembly-files/); then lights.txt,
+// light_directions.txt or the one .lp in the parent folder (UW keeps one lights.txt beside its
+// objects). Any format of ParseLightFile (io/dataset_text.h). Intensities: light_intensities.txt,
+// else the light file's (AliceVision JSON), else all 1. The mask, unless named: mask.png, then
+// mask.* , <name>.mask.*, <name>_mask.* (an image file whose name without extension is "mask" or
+// ends in ".mask", "_mask" or "-mask"); none = the whole image. Ground truth: Normal_gt.mat or
+// normal.txt.
 #pragma once
 
 #include <string>

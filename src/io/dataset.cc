@@ -394,7 +394,7 @@ std::string DescribeImageCounts(const Dataset& d) {
     if (c.pixels == 0) continue;
     const double s = double(c.saturated) / c.pixels, b = double(c.black) / c.pixels;
     clipped_images += s > 0.01;
-    black_images += b > 0.01;
+    black_images += b > 0.1;  // cast shadows alone reach a few percent
     if (s > saturated_fraction) saturated_fraction = s, worst_saturated = j;
     if (b > black_fraction) black_fraction = b, worst_black = j;
   }
@@ -410,8 +410,8 @@ std::string DescribeImageCounts(const Dataset& d) {
   }
   if (black_images > 0) {
     std::snprintf(line, sizeof line,
-                  "%zu of %zu images are black (0) on more than 1%% of the mask (most: %s, "
-                  "%.1f%%)",
+                  "%zu of %zu images are black (0) on more than 10%% of the mask (most: %s, "
+                  "%.1f%%): under-exposed, or lights the object does not face",
                   black_images, d.image_counts.size(), d.filenames[worst_black].c_str(),
                   100 * black_fraction);
     text += (text.empty() ? "" : "; ") + std::string(line);

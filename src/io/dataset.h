@@ -65,7 +65,8 @@ struct DatasetLoadOptions {
 // file, the intensities, the mask, the encoding and why, the size after --crop/--downscale.
 std::string DescribeDataset(const Dataset& dataset);
 
-// "" or one line naming the images with clipped or black pixels (more than 1% of the mask).
+// "" or one line on the images with clipped pixels (over 1% of the mask) or black ones (over 10%:
+// cast shadows alone make a few percent).
 std::string DescribeImageCounts(const Dataset& dataset);
 
 // Reads a dataset directory. Throws std::runtime_error whose one-line message names the file

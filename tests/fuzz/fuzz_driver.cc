@@ -43,6 +43,11 @@ std::vector<std::string> Seeds(const fs::path& fixtures) {
   add(3, normals);
   add(4, R"({"model": "blinn-phong", "ambient": [1, 1, 1], "ka": 0.02, "ks": [0.35, 0.35, 0.3],
              "shininess": 24, "kd": [0.5, 0.5, 0.5]})");
+  add(6, "3\nC:\\capture\\IMG 01.jpg 0 0 1\nIMG_02.jpg 0.6, 0, 0.8\nIMG_03.jpg 0 0.6 0.8\n");
+  add(6, "12\n" + directions);
+  add(7, R"({"lights": [{"lightId": 0, "type": "directional", "direction": [0, 0, -1],
+             "intensity": [1, 2, 3]}, {"lightId": 1, "direction": [0.6, 0, -0.8], "intensity": 1},
+             {"direction": [0, -0.6, -0.8]}]})");
   for (const char* folder : {"scenes", "bad/scenes"}) {
     for (const auto& entry : fs::directory_iterator(fixtures / folder)) {
       if (entry.path().extension() == ".json") add(5, Read(entry.path()));

@@ -1,5 +1,5 @@
-// Fuzz target for the text iphong reads: filenames.txt, the light files, normal.txt, material.json
-// and scene files. The first byte picks the parser, the rest is the text. Every input must end in a
+// Fuzz target for the text iphong reads: filenames.txt, the light files (every format),
+// normal.txt, material.json and scene files. The first byte picks the parser, the rest is the text. Every input must end in a
 // result or in an exception whose message is one line starting with the file it names; anything
 // else (a crash, a sanitizer report, std::bad_alloc, a multi-line or unnamed message) is a finding.
 //
@@ -30,8 +30,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string text(reinterpret_cast<const char*>(data) + 1, size - 1);
   static const char* const kSources[] = {"filenames.txt",         "light_directions.txt",
                                          "light_intensities.txt", "normal.txt",
-                                         "material.json",         "scene.json"};
-  const int parser = data[0] % 6;
+                                         "material.json",         "scene.json",
+                                         "capture.lp",            "lights.json"};
+  const int parser = data[0] % 8;
   const std::string source = kSources[parser];
   try {
     using namespace iphong::io;
@@ -42,6 +43,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       case 2: ParseLightIntensities(text, source, 3); break;
       case 3: ParseNormalText(text, source, 4, 3); break;
       case 4: ParseMaterialJson(text, source); break;
+      case 6:
+      case 7: ParseLightFile(text, source, 0, &warnings, 1000); break;
       default: {
         // No files are read from a fuzzed scene (base folder "": relative mesh paths do not
         // exist), and what the shapes would build is held to 64 MB.

@@ -1,0 +1,156 @@
+"""Captures in the layouts people have (UW, RTI .lp, AliceVision JSON, a plain folder), read as
+they are and giving the same normals as the DiLiGenT layout of the same data; what the reader
+chose is printed; --downscale, --crop, --json and --quiet. Uses ../shared/data (skips when absent);
+the test folders hold symbolic links to it, never copies."""
+import json
+import os
+import pathlib
+
+import pytest
+
+from cli import IPHONG, ROOT, binary_available, run
+
+DATA = pathlib.Path(os.environ.get("IPHONG_DATA_DIR", ROOT.parent / "shared" / "data"))
+UW = DATA / "uw"
+CROP_CAT = DATA / "diligent-crop8" / "cat"
+
+pytestmark = [
+    pytest.mark.skipif(not binary_available(), reason=f"no iphong binary at {IPHONG}"),
+    pytest.mark.skipif(not (UW / "cat").is_dir() or not CROP_CAT.is_dir(),
+                       reason=f"real data not found at {DATA} (set IPHONG_DATA_DIR)"),
+]
+
+
+def normals(dataset, out, *flags):
+    code, stdout, stderr = run("normals", dataset, "-o", out, *flags, timeout=300)
+    assert code == 0, stderr
+    return stdout, json.loads((pathlib.Path(out) / "metrics.json").read_text())
+
+
+def angle_between(a, b):
+    """Mean angle (degrees) between two normal maps, by iphong eval."""
+    code, stdout, stderr = run("eval", a, b)
+    assert code == 0, stderr
+    return json.loads(stdout)["mean_angular_error_deg"]
+
+
+def link(target, name):
+    pathlib.Path(name).symlink_to(target)
+
+
+def uw_as_diligent(obj, folder, order):
+    """UW's `obj` in the DiLiGenT layout, its images listed in `order` (indices)."""
+    folder.mkdir()
+    lights = (UW / "lights.txt").read_text().split("\n")[1:13]
+    for i in range(12):
+        link(UW / obj / f"{obj}.{i}.tga", folder / f"{obj}.{i}.tga")
+    link(UW / obj / f"{obj}.mask.tga", folder / "mask.tga")
+    (folder / "filenames.txt").write_text("".join(f"{obj}.{i}.tga\n" for i in order))
+    (folder / "light_directions.txt").write_text("\n".join(lights) + "\n")
+    return folder
+
+
+def test_uw_cat_runs_as_it_is_and_says_what_it_read(tmp_path):
+    stdout, metrics = normals(UW / "cat", tmp_path / "out")
+    line = stdout.splitlines()[0]
+    assert "12 images (folder layout, natural order: cat.0.tga ... cat.11.tga)" in line
+    assert "lights.txt (count + directions)" in line
+    assert "mask cat.mask.tga" in line
+    assert "encoding linear (8-bit targa states no colour space" in line
+    assert metrics["input"]["mask"].endswith("cat.mask.tga")
+    assert [i["file"] for i in metrics["input"]["images"]][:3] == [
+        "cat.0.tga", "cat.1.tga", "cat.2.tga"]
+
+    # The same data in the DiLiGenT layout gives the same normals; in ls order it does not.
+    same = uw_as_diligent("cat", tmp_path / "listed", range(12))
+    normals(same, tmp_path / "listed-out")
+    assert angle_between(tmp_path / "out" / "normals.exr", tmp_path / "listed-out" / "normals.exr") \
+        < 1e-6
+    ls_order = uw_as_diligent("cat", tmp_path / "ls", sorted(range(12), key=str))
+    normals(ls_order, tmp_path / "ls-out")
+    assert angle_between(tmp_path / "out" / "normals.exr", tmp_path / "ls-out" / "normals.exr") > 10
+
+
+def crop_cat_run(tmp_path):
+    out = tmp_path / "diligent-out"
+    _, metrics = normals(CROP_CAT, out)
+    return out, metrics
+
+
+def test_rti_lp_plain_folder_and_alicevision_json_match_the_diligent_layout(tmp_path):
+    reference, reference_metrics = crop_cat_run(tmp_path)
+    names = (CROP_CAT / "filenames.txt").read_text().split()
+    directions = [line.split() for line in (CROP_CAT / "light_directions.txt").read_text().splitlines()]
+    intensities = [line.split() for line in (CROP_CAT / "light_intensities.txt").read_text().splitlines()]
+    common = ["--intensities", CROP_CAT / "light_intensities.txt", "--mask", CROP_CAT / "mask.png"]
+
+    # RTI: images renamed as a camera names them, the .lp in RTIBuilder's assembly-files/ with
+    # the absolute Windows paths of the machine it ran on.
+    rti = tmp_path / "rti"
+    (rti / "assembly-files").mkdir(parents=True)
+    lp = [str(len(names))]
+    for i, (name, d) in enumerate(zip(names, directions)):
+        link(CROP_CAT / name, rti / f"IMG_{i + 1:04d}.png")
+        lp.append(f"C:\\Users\\someone\\capture\\jpeg-exports\\IMG_{i + 1:04d}.png {' '.join(d)}")
+    (rti / "assembly-files" / "capture.lp").write_text("\n".join(lp) + "\n")
+    stdout, _ = normals(rti, tmp_path / "rti-out", *common)
+    assert "RTI .lp layout, capture.lp" in stdout
+    assert angle_between(reference / "normals.exr", tmp_path / "rti-out" / "normals.exr") < 1e-6
+    # Against the ground truth, the same figure.
+    code, out, _ = run("eval", tmp_path / "rti-out" / "normals.exr", CROP_CAT)
+    assert json.loads(out)["mean_angular_error_deg"] == pytest.approx(
+        reference_metrics["mean_angular_error_deg"], abs=1e-6)
+
+    # A plain folder of images, the light file elsewhere.
+    plain = tmp_path / "plain"
+    plain.mkdir()
+    for name in names:
+        link(CROP_CAT / name, plain / name)
+    normals(plain, tmp_path / "plain-out", "--lights", CROP_CAT / "light_directions.txt", *common)
+    assert angle_between(reference / "normals.exr", tmp_path / "plain-out" / "normals.exr") < 1e-6
+
+    # AliceVision's lights JSON (its camera frame: y down, z away from the camera), intensities in it.
+    lights = {"lights": [{"lightId": i, "type": "directional",
+                          "direction": [float(d[0]), -float(d[1]), -float(d[2])],
+                          "intensity": [float(v) for v in e]}
+                         for i, (d, e) in enumerate(zip(directions, intensities))]}
+    (tmp_path / "lights.json").write_text(json.dumps(lights))
+    normals(plain, tmp_path / "json-out", "--lights", tmp_path / "lights.json", "--mask",
+            CROP_CAT / "mask.png")
+    assert angle_between(reference / "normals.exr", tmp_path / "json-out" / "normals.exr") < 1e-5
+
+
+def test_mask_names_people_use(tmp_path):
+    base = uw_as_diligent("cat", tmp_path / "cat", range(12))
+    _, with_mask = normals(base, tmp_path / "a")
+    for name in ["mask.png", "cat.mask.tga", "cat_mask.tga"]:
+        current = next(p for p in base.iterdir() if "mask" in p.name)
+        current.rename(base / name)
+        stdout, metrics = normals(base, tmp_path / name)
+        assert f"mask {name}" in stdout
+        assert metrics["pixels"] == with_mask["pixels"] < 512 * 340 / 2
+    next(p for p in base.iterdir() if "mask" in p.name).unlink()
+    stdout, metrics = normals(base, tmp_path / "none")
+    assert "mask none (the whole image)" in stdout and metrics["pixels"] == 512 * 340
+
+
+def test_downscale_and_crop_keep_the_error(tmp_path):
+    _, full = crop_cat_run(tmp_path)
+    _, half = normals(CROP_CAT, tmp_path / "half", "--downscale", "2")
+    assert half["input"]["size"] == [148, 160] and half["input"]["file_size"] == [296, 320]
+    assert half["mean_angular_error_deg"] == pytest.approx(full["mean_angular_error_deg"], abs=1.0)
+    stdout, cut = normals(CROP_CAT, tmp_path / "cut", "--crop", "0,0,296,160")  # the top half
+    assert "296x320 read as 296x160" in stdout
+    assert cut["pixels"] < full["pixels"] and cut["evaluated_pixels"] == cut["pixels"]
+    assert cut["mean_angular_error_deg"] == pytest.approx(full["mean_angular_error_deg"], abs=2.0)
+    code, _, stderr = run("normals", CROP_CAT, "-o", tmp_path / "bad", "--crop", "200,0,200,10")
+    assert code == 1 and "reaches outside the 296x320 image" in stderr
+    assert not (tmp_path / "bad").exists()
+
+
+def test_json_and_quiet(tmp_path):
+    code, stdout, stderr = run("normals", UW / "gray", "-o", tmp_path / "j", "--json")
+    assert code == 0, stderr
+    assert json.loads(stdout) == json.loads((tmp_path / "j" / "metrics.json").read_text())
+    code, stdout, stderr = run("normals", UW / "gray", "-o", tmp_path / "q", "--quiet")
+    assert code == 0 and stdout == ""

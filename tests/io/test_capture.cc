@@ -1,0 +1,215 @@
+// Capture folders of every layout: which images, lights, mask and encoding are found, in which
+// order, and the one-line errors when they do not match.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+#include "error_of.h"
+#include "io/capture.h"
+#include "io/dataset.h"
+#include "io/dataset_text.h"
+#include "io/image_io.h"
+
+namespace iphong::io {
+namespace {
+namespace fs = std::filesystem;
+using test::ErrorOf;
+
+class Capture : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() /
+            ("iphong-capture-" +
+             std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(root_);
+    dir_ = root_ / "obj";
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(root_); }
+  void Write(const fs::path& path, const std::string& text) const { std::ofstream(path) << text; }
+  // A 4x3 image whose red channel is `value` everywhere.
+  void Image(const fs::path& path, float value, int bits = 8) const {
+    ImageF image(4, 3, 3, value);
+    WriteImage(path.string(), image, {bits, Encoding::kLinear});
+  }
+  fs::path root_, dir_;
+};
+
+const char* kTwelveLights =
+    "12\n"
+    "0.40 0.48 0.78\n0.10 0.16 0.98\n-0.07 0.18 0.98\n-0.13 0.43 0.89\n-0.33 0.49 0.81\n"
+    "-0.11 0.54 0.84\n0.24 0.41 0.88\n0.06 0.42 0.91\n0.13 0.34 0.93\n0.03 0.34 0.94\n"
+    "0.10 0.05 0.99\n-0.16 0.35 0.92\n";
+
+TEST(NaturalOrder, NumbersCompareAsNumbers) {
+  std::vector<std::string> names = {"cat.10.tga", "cat.2.tga",    "cat.mask.tga", "cat.0.tga",
+                                    "cat.1.tga",  "IMG_0009.JPG", "img_10.jpg",   "cat.002.tga"};
+  std::sort(names.begin(), names.end(), NaturalLess);
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"cat.0.tga", "cat.1.tga", "cat.002.tga", "cat.2.tga",
+                                      "cat.10.tga", "cat.mask.tga", "IMG_0009.JPG", "img_10.jpg"}));
+}
+
+TEST(LightFiles, EveryFormatGivesTheSameDirections) {
+  const std::string plain = "0 0 1\n0.6 0 0.8\n0 0.6 0.8\n";
+  const LightFile a = ParseLightFile(plain, "light_directions.txt", 0, nullptr);
+  EXPECT_EQ(a.format, "directions");
+  const LightFile b =
+      ParseLightFile("3\n0, 0, 1\n0.6, 0, 0.8\n0,0.6,0.8\n", "lights.txt", 3, nullptr);
+  EXPECT_EQ(b.format, "count + directions");
+  const LightFile c = ParseLightFile(
+      "3\nC:\\capture\\jpeg-exports\\IMG 01.jpg 0 0 1\nIMG 02.jpg 0.6 0 0.8\nIMG_03.jpg 0 0.6 "
+      "0.8\n",
+      "rig.lp", 0, nullptr);
+  EXPECT_EQ(c.format, "RTI .lp");
+  EXPECT_EQ(c.image_names, (std::vector<std::string>{"C:\\capture\\jpeg-exports\\IMG 01.jpg",
+                                                     "IMG 02.jpg", "IMG_03.jpg"}));
+  // AliceVision's frame: y down, z away from the camera.
+  const LightFile d = ParseLightFile(
+      R"({"lights": [{"lightId": 0, "type": "directional", "direction": [0, 0, -1], "intensity": [1, 2, 3]},
+                     {"lightId": 1, "type": "directional", "direction": [0.6, 0, -0.8], "intensity": 1},
+                     {"lightId": 2, "type": "directional", "direction": [0, -0.6, -0.8], "intensity": [1, 1, 1]}]})",
+      "lights.json", 0, nullptr);
+  EXPECT_EQ(d.format, "AliceVision JSON");
+  EXPECT_EQ(d.intensities[0], Vec3d(1, 2, 3));
+  for (const LightFile* f : {&b, &c, &d}) {
+    ASSERT_EQ(f->directions.size(), 3u);
+    for (int i = 0; i < 3; ++i) EXPECT_LT((f->directions[i] - a.directions[i]).norm(), 1e-12);
+  }
+}
+
+TEST(LightFiles, CountsThatDisagreeAreNamed) {
+  EXPECT_EQ(
+      ErrorOf([] { ParseLightFile("4\n0 0 1\n0.6 0 0.8\n0 0.6 0.8\n", "lights.txt", 0, nullptr); }),
+      "lights.txt:1: says 4 lights on its first line but lists 3");
+  EXPECT_EQ(ErrorOf([] { ParseLightFile("0 0 1\n0.6 0 0.8\n0 0.6 0.8\n", "l.txt", 4, nullptr); }),
+            "l.txt: has 3 lights for 4 images");
+  EXPECT_EQ(
+      ErrorOf([] { ParseLightFile("2\nIMG_01.jpg 0 0\nb.jpg 1 0 0\n", "rig.lp", 0, nullptr); }),
+      "rig.lp:2: expected 'filename lx ly lz', got 'IMG_01.jpg 0 0'");
+  EXPECT_NE(ErrorOf([] {
+              ParseLightFile(R"({"lights": [{"direction": [0, 0, 1], "colour": 1}]})",
+                             "lights.json", 0, nullptr);
+            }).find("lights.json: lights[0]"),
+            std::string::npos);
+}
+
+TEST_F(Capture, UwLayoutRunsAsItIs) {
+  // UW: <obj>.<i>.tga, <obj>.mask.tga, one lights.txt beside the objects' folders.
+  Write(root_ / "lights.txt", kTwelveLights);
+  for (int i = 11; i >= 0; --i) Image(dir_ / ("obj." + std::to_string(i) + ".tga"), 0.1f * (i % 5));
+  Image(dir_ / "obj.mask.tga", 1);
+  const CaptureFiles c = FindCapture(dir_.string(), {});
+  EXPECT_EQ(c.layout, "folder");
+  EXPECT_EQ(c.order, "natural order");
+  ASSERT_EQ(c.names.size(), 12u);
+  EXPECT_EQ(c.names[2], "obj.2.tga");  // not obj.10.tga, where ls puts it
+  EXPECT_EQ(c.names[11], "obj.11.tga");
+  EXPECT_EQ(fs::path(c.lights_path), (dir_ / ".." / "lights.txt").lexically_normal());
+  EXPECT_EQ(c.lights_format, "count + directions");
+  EXPECT_EQ(fs::path(c.mask_path).filename(), "obj.mask.tga");
+  EXPECT_EQ(c.light_intensities[5], Vec3d::Ones());
+
+  // The names people give masks, best first.
+  fs::rename(dir_ / "obj.mask.tga", dir_ / "obj_mask.png");
+  EXPECT_EQ(fs::path(FindCapture(dir_.string(), {}).mask_path).filename(), "obj_mask.png");
+  Image(dir_ / "mask.tga", 1);
+  EXPECT_EQ(fs::path(FindCapture(dir_.string(), {}).mask_path).filename(), "mask.tga");
+
+  // A light too few: the count, the folder and the images found.
+  Write(root_ / "lights.txt", "3\n0 0 1\n0.6 0 0.8\n0 0.6 0.8\n");
+  EXPECT_EQ(ErrorOf([&] { FindCapture(dir_.string(), {}); }),
+            (dir_ / ".." / "lights.txt").lexically_normal().string() + ": has 3 lights, but " +
+                dir_.string() +
+                " holds 12 images (obj.0.tga ... obj.11.tga); list the images in filenames.txt, "
+                "in light order");
+}
+
+TEST_F(Capture, RtiLpNamesTheImagesWhereverRtiBuilderWroteThem) {
+  fs::create_directories(dir_ / "assembly-files");
+  std::string lp = "3\n";
+  const char* directions[] = {"0 0 1", "0.6 0 0.8", "0 0.6 0.8"};
+  for (int i = 0; i < 3; ++i) {
+    const std::string name = "IMG_" + std::to_string(9 - i) + ".png";  // not in natural order
+    Image(dir_ / name, 0.2f);
+    lp += "C:\\Users\\someone\\capture\\jpeg-exports\\" + name + " " + directions[i] + "\n";
+  }
+  Write(dir_ / "assembly-files" / "capture.lp", lp);
+  CaptureOptions options;
+  options.lights = (dir_ / "assembly-files" / "capture.lp").string();
+  const CaptureFiles c = FindCapture(dir_.string(), options);
+  EXPECT_EQ(c.layout, "RTI .lp");
+  ASSERT_EQ(c.paths.size(), 3u);
+  EXPECT_EQ(fs::path(c.paths[0]).filename(), "IMG_9.png");  // the .lp's order
+  EXPECT_TRUE(fs::exists(c.paths[2]));
+
+  fs::remove(dir_ / "IMG_8.png");
+  EXPECT_NE(ErrorOf([&] { FindCapture(dir_.string(), options); })
+                .find("capture.lp: names C:\\Users\\someone\\capture\\jpeg-exports\\IMG_8.png, "
+                      "which is in neither"),
+            std::string::npos);
+}
+
+TEST_F(Capture, EncodingIsWhatTheFileStatesElseLinear) {
+  Image(dir_ / "plain.png", 0.5f);
+  const StoredEncoding plain = ReadStoredEncoding((dir_ / "plain.png").string());
+  EXPECT_EQ(plain.bits, 8);
+  // OpenImageIO calls every PNG sRGB; iphong's linear files carry gAMA 1, others nothing.
+  EXPECT_TRUE(!plain.stated || plain.encoding == Encoding::kLinear) << plain.statement;
+
+  WriteImage((dir_ / "srgb.png").string(), ImageF(4, 3, 3, 0.5f), {8, Encoding::kSrgb});
+  const StoredEncoding srgb = ReadStoredEncoding((dir_ / "srgb.png").string());
+  EXPECT_TRUE(srgb.stated);
+  EXPECT_EQ(srgb.encoding, Encoding::kSrgb);
+
+  WriteImage((dir_ / "photo.jpg").string(), ImageF(4, 3, 3, 0.5f), {8, Encoding::kSrgb});
+  EXPECT_EQ(ReadStoredEncoding((dir_ / "photo.jpg").string()).statement, "JPEG");
+
+  WriteImage((dir_ / "f.exr").string(), ImageF(4, 3, 3, 0.5f));
+  EXPECT_TRUE(ReadStoredEncoding((dir_ / "f.exr").string()).is_float);
+
+  CaptureFiles files;
+  CaptureOptions forced;
+  forced.encoding = "srgb";
+  EXPECT_EQ(ChooseEncoding(files, forced, plain).encoding, Encoding::kSrgb);
+  EXPECT_EQ(ChooseEncoding(files, {}, srgb).encoding, Encoding::kSrgb);
+  StoredEncoding tga;
+  tga.format = "targa";
+  EXPECT_EQ(ChooseEncoding(files, {}, tga).encoding, Encoding::kLinear);
+  EXPECT_NE(ChooseEncoding(files, {}, tga).reason.find("states no colour space"),
+            std::string::npos);
+}
+
+TEST_F(Capture, CropAndDownscaleApplyToImagesMaskAndCounts) {
+  Write(dir_ / "lights.txt", "0 0 1\n0.6 0 0.8\n0 0.6 0.8\n");
+  for (int i = 1; i <= 3; ++i) {
+    ImageF image(8, 6, 3, 0.25f);
+    image.at(0, 0)[0] = 1.0f;  // one clipped pixel, outside the crop
+    image.at(5, 3)[1] = 1.0f;  // one clipped pixel inside it
+    WriteImage((dir_ / ("img" + std::to_string(i) + ".png")).string(), image,
+               {16, Encoding::kLinear});
+  }
+  DatasetLoadOptions options;
+  options.capture.crop = {2, 2, 6, 4};
+  options.capture.downscale = 2;
+  const Dataset d = LoadDataset(dir_.string(), options);
+  ASSERT_EQ(d.images.size(), 3u);
+  EXPECT_EQ(d.images[0].width, 3);
+  EXPECT_EQ(d.images[0].height, 2);
+  EXPECT_EQ(d.file_width, 8);
+  // Block (crop cols 2-3, rows 0-1) holds the clipped green pixel: (3 × 0.25 + 1) / 4.
+  EXPECT_NEAR(d.images[0].at(1, 0)[1], 0.4375f, 1e-4);
+  EXPECT_EQ(d.image_counts[0].saturated, 1u);
+  EXPECT_EQ(d.image_counts[0].pixels, 24u);
+  EXPECT_NE(DescribeDataset(d).find("8x6 read as 3x2"), std::string::npos);
+
+  options.capture.crop = {4, 4, 6, 4};
+  EXPECT_NE(
+      ErrorOf([&] { LoadDataset(dir_.string(), options); }).find("reaches outside the 8x6 image"),
+      std::string::npos);
+}
+
+}  // namespace
+}  // namespace iphong::io
