@@ -36,6 +36,7 @@ const char* MethodName(Method method) {
 
 std::string IntegrateOptions::Validate() const {
   if (!(min_cos > 0 && min_cos < 1)) return "min_cos must be in (0, 1)";
+  if (!(max_back_facing >= 0 && max_back_facing <= 1)) return "max_back_facing must be in [0, 1]";
   if (!(pixel_size > 0) || !std::isfinite(pixel_size)) return "pixel size must be > 0";
   if (perspective) {
     const Intrinsics& k = intrinsics;
@@ -66,9 +67,10 @@ std::string IntegrateOptions::Validate() const {
 
 namespace {
 
-// Returns the number of back-facing normals (an error unless allowed).
-std::size_t CheckInputs(const ImageF& normals, const Mask& mask, bool allow_back_facing) {
+// Returns the number of back-facing normals (an error when more than allowed).
+std::size_t CheckInputs(const ImageF& normals, const Mask& mask, const IntegrateOptions& options) {
   std::size_t back_facing = 0;
+  std::string first_back_facing;
   if (normals.channels != 3) throw std::invalid_argument("the normal map must have 3 channels");
   if (normals.width != mask.width || normals.height != mask.height) {
     throw std::invalid_argument("mask is " + SizeText(mask.width, mask.height) +
@@ -90,15 +92,19 @@ std::size_t CheckInputs(const ImageF& normals, const Mask& mask, bool allow_back
         throw std::invalid_argument("normal of length " + std::to_string(norm) + where() +
                                     " is not unit (0 outside the mask only)");
       }
-      if (!(n[2] > 0)) {
-        ++back_facing;
-        if (allow_back_facing) continue;
-        throw std::invalid_argument(
-            "normal faces away from the camera (nz = " + std::to_string(n[2]) + ")" + where() +
-            "; allow back-facing normals (allow_back_facing, --allow-back-facing) to "
-            "treat them as grazing");
+      if (!(n[2] > 0) && back_facing++ == 0) {
+        first_back_facing = "nz = " + std::to_string(n[2]) + where();
       }
     }
+  }
+  const std::size_t inside = mask.count();
+  if (!options.allow_back_facing && back_facing > options.max_back_facing * inside) {
+    throw std::invalid_argument(
+        std::to_string(back_facing) + " of " + std::to_string(inside) + " normals (" +
+        std::to_string(static_cast<int>(100.0 * back_facing / inside + 0.5)) +
+        "%) face away from the camera (first: " + first_back_facing +
+        "): a normal map in another frame (z into the scene?); allow back-facing normals "
+        "(allow_back_facing, --allow-back-facing) to treat them as grazing");
   }
   return back_facing;
 }
@@ -159,7 +165,7 @@ IntegrateResult IntegrateNormals(const ImageF& normals_cam, const Mask& mask,
                                  const IntegrateOptions& options) {
   const auto start = Clock::now();
   if (auto m = options.Validate(); !m.empty()) throw std::invalid_argument(m);
-  const std::size_t back_facing = CheckInputs(normals_cam, mask, options.allow_back_facing);
+  const std::size_t back_facing = CheckInputs(normals_cam, mask, options);
   const bool has_prior = options.depth_prior.channels == 1;
   if (has_prior &&
       (options.depth_prior.width != mask.width || options.depth_prior.height != mask.height)) {

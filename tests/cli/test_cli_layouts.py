@@ -154,3 +154,29 @@ def test_json_and_quiet(tmp_path):
     assert json.loads(stdout) == json.loads((tmp_path / "j" / "metrics.json").read_text())
     code, stdout, stderr = run("normals", UW / "gray", "-o", tmp_path / "q", "--quiet")
     assert code == 0 and stdout == ""
+
+
+def test_eval_reads_png_normal_maps_in_both_conventions(tmp_path):
+    exr = None
+    for convention in ["opengl", "directx"]:
+        out = tmp_path / convention
+        _, metrics = normals(CROP_CAT, out, "--normal-map-convention", convention)
+        exr = exr or metrics["mean_angular_error_deg"]
+        code, stdout, stderr = run("eval", out / "normals.png", CROP_CAT,
+                                   "--normal-map-convention", convention)
+        assert code == 0, stderr
+        assert json.loads(stdout)["mean_angular_error_deg"] == pytest.approx(exr, abs=0.01)
+    # DiLiGenT's own 8-bit picture of its ground truth: the quantization only.
+    code, stdout, _ = run("eval", CROP_CAT / "Normal_gt.png", CROP_CAT)
+    assert json.loads(stdout)["mean_angular_error_deg"] < 0.5
+
+
+def test_integrate_takes_diligent_ground_truth_without_flags(tmp_path):
+    for source in [CROP_CAT, CROP_CAT / "Normal_gt.png"]:
+        out = tmp_path / source.name
+        code, _, stderr = run("integrate", source, "-o", out)
+        assert code == 0, stderr
+        report = json.loads((out / "integrate.json").read_text())
+        # A few silhouette normals tip past 90°: clamped to grazing and counted.
+        assert 0 < report["back_facing_pixels"] < 0.02 * report["pixels"]
+        assert "face away from the camera: taken as grazing" in stderr
