@@ -35,11 +35,12 @@ using reflectance::Material;
 struct DemoOptions {
   std::string output_dir = "iphong-demo";
   int size = 256;
+  CommonOptions common;
 };
 
 // Seed 002's numbers. The seed's V points from the viewer to the surface; iphong's view
 // direction points toward the viewer, so it is negated (R·V is unchanged).
-void PrintSeed002Example() {
+void PrintSeed002Example(const CommonOptions& common) {
   Material material;
   material.ka = Vec3d(0.1, 0.1, 0.1);
   material.kd = Vec3d(0.9, 0.0, 0.0);
@@ -53,9 +54,9 @@ void PrintSeed002Example() {
   const Vec3d view_cam = -Vec3d(0.23570, 0.23570, -0.94281);
   const Vec3d color = reflectance::Shade(normal_cam, view_cam.normalized(), Vec3d::Zero().eval(),
                                          material, lighting, reflectance::ModelOptions{});
-  std::printf("Seed 002 worked example (Phong, 2 lights, the second behind the surface):\n");
+  Say(common, "Seed 002 worked example (Phong, 2 lights, the second behind the surface):\n");
   const Vec3d seed(0.39272, 0.13292, 0.12634);
-  std::printf(
+  Say(common,
       "  I = [%.6f %.6f %.6f]\n  seed 002 prints [0.39272 0.13292 0.12634] (it rounds each step);"
       " largest difference %.1e\n",
       color[0], color[1], color[2], (color - seed).cwiseAbs().maxCoeff());
@@ -87,7 +88,7 @@ void Paste(ImageF& strip, const ImageF& tile, int x0) {
 }
 
 // Every preset as a sphere, tiled left to right, top to bottom.
-ImageF RenderPresetSheet(int tile, const Lighting& lighting) {
+ImageF RenderPresetSheet(int tile, const Lighting& lighting, int threads) {
   const auto& presets = reflectance::MaterialPresets();
   const int columns = 5;
   const int rows = (static_cast<int>(presets.size()) + columns - 1) / columns;
@@ -99,6 +100,7 @@ ImageF RenderPresetSheet(int tile, const Lighting& lighting) {
   scene.objects[0].mesh = geometry::MakeSphere(0.8, 5);
   render::RenderOptions options;
   options.supersampling = 2;
+  options.threads = threads;
   for (std::size_t i = 0; i < presets.size(); ++i) {
     scene.objects[0].material = presets[i].material;
     const render::RenderOutput out = render::Render(scene, options, false);
@@ -122,10 +124,11 @@ void RunDemo(const DemoOptions& options) {
   if (options.size < 8 || options.size > 8192) {
     throw std::invalid_argument("--size must be in 8..8192");
   }
-  PrintSeed002Example();
+  PrintSeed002Example(options.common);
 
   // 1. The scene through the scan-line renderer, checked against the analytic sphere.
   io::SceneFile file = io::ParseScene(kDemoScene, "built-in demo scene", "");
+  file.options.threads = options.common.threads;
   file.scene.camera = geometry::Camera::Orthographic(options.size, options.size, 2.0);
   const render::RenderOutput rendered = render::Render(file.scene, file.options, false);
   const auto analytic = geometry::SampleSphere(file.scene.camera, Vec3d::Zero(), 0.8);
@@ -177,20 +180,27 @@ void RunDemo(const DemoOptions& options) {
   const std::string dir = options.output_dir + "/";
   io::WriteImage(out.file("sphere.png"), rendered.image);
   io::WriteImage(out.file("shading.png"), strip);
-  io::WriteImage(out.file("materials.png"), RenderPresetSheet(128, DemoLighting()));
+  std::vector<std::string> names;
+  for (const auto& preset : reflectance::MaterialPresets()) names.push_back(preset.name);
+  io::WriteImage(out.file("materials.png"),
+                 io::LabelTiles(RenderPresetSheet(128, DemoLighting(), options.common.threads), 128,
+                                128, 22, names));
   io::OutputSettings png;
   png.format = "png";
   io::WriteRenderOutput(out, "sphere-dataset/", lit, file.options, dataset, png, true);
 
   // 4. The inverse: normals from the dataset just written (read back from disk), coefficients
   //    unknown, against the renderer's exact ground truth; Woodham beside it.
-  io::Dataset data_set = io::LoadDataset(out.folder("sphere-dataset"));
+  io::DatasetLoadOptions load;
+  load.threads = options.common.threads;
+  io::Dataset data_set = io::LoadDataset(out.folder("sphere-dataset"), load);
   std::vector<const float*> images;
   for (const ImageF& image : data_set.images) images.push_back(image.pixels.data());
   const solve::PhotometricData observations =
       solve::GatherObservations(images, data_set.width(), data_set.height(), data_set.mask,
                                 data_set.light_directions, data_set.light_intensities);
   solve::NormalOptions estimate;  // material.json is ignored: ks and shininess are estimated
+  estimate.threads = options.common.threads;
   const solve::NormalResult recovered = solve::EstimateNormals(observations, estimate);
   estimate.model = reflectance::Lobe::kLambert;
   const solve::NormalResult woodham = solve::EstimateNormals(observations, estimate);
@@ -202,12 +212,13 @@ void RunDemo(const DemoOptions& options) {
                  io::NormalMapPicture(recovered.normals, data_set.mask),
                  {16, io::Encoding::kLinear});
   io::WriteImage(out.file("normals/normals.exr"), recovered.normals);
-  io::WriteErrorMap(out.file("normals/error.png"), phong_error.error_deg, data_set.mask, 10);
+  io::WriteErrorMap(out.file("normals/error.png"), phong_error.error_deg, data_set.mask,
+                    io::ErrorMapScale(phong_error.error_deg, data_set.mask));
 
   // 5. Heights and a mesh from the recovered normals, against the renderer's depth.
   integrate::IntegrateOptions integration;
   integration.pixel_size = file.scene.camera.pixel_size();
-  integration.allow_back_facing = true;  // the silhouette's recovered normals may tip past 90°
+  integration.threads = options.common.threads;
   const integrate::IntegrateResult heights =
       integrate::IntegrateNormals(recovered.normals, data_set.mask, integration);
   double mean_difference = 0, squared = 0;
@@ -231,36 +242,37 @@ void RunDemo(const DemoOptions& options) {
                             io::FrameOf(integration), surface_files);
   out.Commit();
 
-  std::printf("\nScan-line renderer, %zu-triangle sphere, Phong shading, %dx%d:\n", triangles,
-              options.size, options.size);
-  std::printf(
+  Say(options.common, "\nScan-line renderer, %zu-triangle sphere, Phong shading, %dx%d:\n",
+      triangles, options.size, options.size);
+  Say(options.common,
       "  mean |rendered - analytic per-pixel Phong| = %.2e  (raster %.0f ms, shading %.0f ms)\n",
       error / n, 1e3 * rendered.raster_seconds, 1e3 * rendered.shade_seconds);
-  std::printf("\nNormals recovered from the 12-image dataset (coefficients unknown):\n");
-  std::printf(
+  Say(options.common, "\nNormals recovered from the 12-image dataset (coefficients unknown):\n");
+  Say(options.common,
       "  Phong fit: mean %.3f deg, median %.3f deg; estimated ks = [%.3f %.3f %.3f], "
       "shininess = %.1f (true [0.5 0.5 0.4], 10)\n",
       phong_error.mean_deg, phong_error.median_deg, recovered.ks[0], recovered.ks[1],
       recovered.ks[2], recovered.shininess);
-  std::printf("  Woodham (Lambertian least squares): mean %.2f deg\n", woodham_error.mean_deg);
-  std::printf("\nHeights integrated from the recovered normals (%s, %.0f ms):\n",
-              integrate::MethodName(heights.summary.method), 1e3 * heights.summary.total_seconds);
-  std::printf(
+  Say(options.common, "  Woodham (Lambertian least squares): mean %.2f deg\n",
+      woodham_error.mean_deg);
+  Say(options.common, "\nHeights integrated from the recovered normals (%s, %.0f ms):\n",
+      integrate::MethodName(heights.summary.method), 1e3 * heights.summary.total_seconds);
+  Say(options.common,
       "  RMSE against the true depth %.4f scene units (%.2f%% of the radius 0.8); "
       "mesh of %zu triangles\n",
       height_rmse, 100 * height_rmse / 0.8, surface.triangles);
-  std::printf("\nWrote:\n");
-  std::printf("  %-32s the sphere\n", (dir + "sphere.png").c_str());
-  std::printf("  %-32s flat | Gouraud | Phong on a 320-triangle sphere (seed 001)\n",
-              (dir + "shading.png").c_str());
-  std::printf("  %-32s the 13 material presets (`iphong materials`)\n",
-              (dir + "materials.png").c_str());
-  std::printf("  %-32s 12-light photometric-stereo dataset with ground truth\n",
-              (dir + "sphere-dataset/").c_str());
-  std::printf("  %-32s recovered normals and their angular error map\n",
-              (dir + "normals/").c_str());
-  std::printf("  %-32s heights, mesh.ply (MeshLab, Blender) and a rendered picture of it\n",
-              (dir + "surface/").c_str());
+  Say(options.common, "\nWrote:\n");
+  Say(options.common, "  %-32s the sphere\n", (dir + "sphere.png").c_str());
+  Say(options.common, "  %-32s flat | Gouraud | Phong on a 320-triangle sphere (seed 001)\n",
+      (dir + "shading.png").c_str());
+  Say(options.common, "  %-32s the 13 material presets (`iphong materials`)\n",
+      (dir + "materials.png").c_str());
+  Say(options.common, "  %-32s 12-light photometric-stereo dataset with ground truth\n",
+      (dir + "sphere-dataset/").c_str());
+  Say(options.common, "  %-32s recovered normals and their angular error map\n",
+      (dir + "normals/").c_str());
+  Say(options.common, "  %-32s heights, mesh.ply (MeshLab, Blender) and a rendered picture of it\n",
+      (dir + "surface/").c_str());
 }
 
 }  // namespace
@@ -272,6 +284,8 @@ void AddDemoCommand(CLI::App& app) {
                   "Output folder: new or empty, or an earlier demo output (replaced)")
       ->capture_default_str();
   cmd->add_option("--size", options->size, "Sphere image size in pixels")->capture_default_str();
+  AddThreadsOption(cmd, options->common);
+  cmd->add_flag("-q,--quiet", options->common.quiet, "Print nothing but errors and warnings");
   cmd->callback([options] { RunDemo(*options); });
 }
 

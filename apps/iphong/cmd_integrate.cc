@@ -5,6 +5,7 @@
 
 #include "integrate/integrate.h"
 #include "io/dataset.h"
+#include "io/files.h"
 #include "io/image_io.h"
 #include "io/output_folder.h"
 #include "io/surface.h"
@@ -114,19 +115,16 @@ void RunIntegrate(IntegrateCommandOptions& o) {
                                SizeText(in.normals.width, in.normals.height));
     }
   }
-  const bool tty = ErrIsTerminal();
-  if (tty) {
-    options.progress = [](double fraction) {
-      std::fprintf(Err(), "\rintegrating: %3.0f%%", 100 * fraction);
-    };
-  }
+  auto progress = std::make_shared<Progress>("integrate", o.common.talk());
+  options.progress = [progress](double fraction) { progress->Update(fraction); };
   RequireMemory(
       o.common.memory(), io::EstimateSurfaceBytes(in.mask.count(), options),
       o.normals + ": integrating and meshing " + std::to_string(in.mask.count()) + " pixels");
   integrate::IntegrateResult result;
   try {
     result = integrate::IntegrateNormals(in.normals, in.mask, options);
-    if (tty) std::fprintf(Err(), "\r%20s\r", "");
+    options.progress = nullptr;
+    progress.reset();
   } catch (const std::invalid_argument& e) {
     const std::string source = o.mask.empty() ? o.normals : o.normals + " with mask " + o.mask;
     throw std::runtime_error(source + ": " + e.what());
@@ -138,17 +136,20 @@ void RunIntegrate(IntegrateCommandOptions& o) {
   const io::SurfaceFiles written =
       io::WriteSurfaceFiles(out, "", result, in.normals, in.mask, io::FrameOf(options), files);
   out.Commit();
+  if (o.common.json) {
+    PrintJson(o.common, io::ReadTextFile((fs::path(o.output_dir) / "integrate.json").string()));
+  }
 
   const integrate::IntegrateSummary& s = result.summary;
   if (s.back_facing_pixels > 0) {
     Warn(std::to_string(s.back_facing_pixels) +
          " normals face away from the camera: taken as grazing");
   }
-  std::printf("Integrated %zu pixels (%d part%s) with %s, %s: %.3f s (solve %.3f s%s)\n", s.pixels,
-              s.components, s.components == 1 ? "" : "s", integrate::MethodName(s.method),
-              s.solver.c_str(), s.total_seconds, s.solve_seconds,
-              s.iterations ? (", " + std::to_string(s.iterations) + " CG iterations").c_str() : "");
-  std::printf(
+  Say(o.common, "Integrated %zu pixels (%d part%s) with %s, %s: %.3f s (solve %.3f s%s)\n",
+      s.pixels, s.components, s.components == 1 ? "" : "s", integrate::MethodName(s.method),
+      s.solver.c_str(), s.total_seconds, s.solve_seconds,
+      s.iterations ? (", " + std::to_string(s.iterations) + " CG iterations").c_str() : "");
+  Say(o.common,
       "Surface normals vs input: mean %.2f deg, median %.2f deg; mesh %zu vertices, %zu "
       "triangles\n",
       written.consistency_mean_deg, written.consistency_median_deg, written.vertices,
@@ -156,7 +157,7 @@ void RunIntegrate(IntegrateCommandOptions& o) {
   std::ostringstream names;
   for (std::size_t i = 0; i < written.names.size(); ++i)
     names << (i ? ", " : "") << written.names[i];
-  std::printf("Wrote %s: %s\n", o.output_dir.c_str(), names.str().c_str());
+  Say(o.common, "Wrote %s: %s\n", o.output_dir.c_str(), names.str().c_str());
 }
 
 }  // namespace
@@ -212,6 +213,7 @@ void AddIntegrateCommand(CLI::App& app) {
   AddOverwriteOption(cmd, o->common);
   AddThreadsOption(cmd, o->common);
   AddMemoryOption(cmd, o->common);
+  AddReportOptions(cmd, o->common);
   cmd->callback([o] { RunIntegrate(*o); });
 }
 

@@ -69,10 +69,6 @@ nlohmann::json MetricsJson(const solve::AngularErrorMetrics& m) {
           {"fraction_below_20_deg", m.below_20_deg}};
 }
 
-double ErrorScale(const solve::AngularErrorMetrics& m) {
-  return m.mean_deg < 5 ? 10 : m.mean_deg < 12 ? 30 : 60;
-}
-
 void RunNormals(const NormalsCommandOptions& o) {
   const auto total_start = Clock::now();
   RequireFolder(o.dataset);
@@ -166,7 +162,15 @@ void RunNormals(const NormalsCommandOptions& o) {
                  io::NormalMapPicture(result.normals, dataset.mask, o.convention == "directx"),
                  {16, io::Encoding::kLinear});
   io::WriteImage(out.file("albedo.exr"), result.albedo);
+  io::WriteAlbedoPicture(out.file("albedo.png"), result.albedo, dataset.mask);
   io::WriteImage(out.file("residual.exr"), result.residual);
+  {
+    Mask fitted = dataset.mask;  // residual −1: flagged pixels, black in the picture
+    for (std::size_t p = 0; p < fitted.inside.size(); ++p)
+      fitted.inside[p] = fitted.inside[p] && result.residual.pixels[p] >= 0;
+    io::WriteErrorMap(out.file("residual.png"), result.residual, fitted,
+                      io::ErrorMapScale(result.residual, fitted), "rms");
+  }
   const bool specular_map = result.material_estimated && !result.specular.pixels.empty();
   if (specular_map) io::WriteImage(out.file("specular.exr"), result.specular);
   if (!ambiguity.pixels.empty()) io::WriteImage(out.file("ambiguity.exr"), ambiguity);
@@ -196,7 +200,8 @@ void RunNormals(const NormalsCommandOptions& o) {
     io::WriteTextFile(out.file("material.json"), material.dump(2) + "\n");
   }
   if (errors)
-    io::WriteErrorMap(out.file("error.png"), errors->error_deg, dataset.mask, ErrorScale(*errors));
+    io::WriteErrorMap(out.file("error.png"), errors->error_deg, dataset.mask,
+                      io::ErrorMapScale(errors->error_deg, dataset.mask));
   std::optional<io::SurfaceFiles> surface;
   integrate::IntegrateResult heights;
   if (o.integrate) {
@@ -279,7 +284,7 @@ void RunNormals(const NormalsCommandOptions& o) {
         surface->consistency_mean_deg, surface->triangles);
   }
   Say(o.common,
-      "Wrote %s: normals.exr, normals.png, albedo.exr, residual.exr, metrics.json%s%s%s%s%s%s\n",
+      "Wrote %s: normals.exr/.png, albedo.exr/.png, residual.exr/.png, metrics.json%s%s%s%s%s%s\n",
       o.output_dir.c_str(), result.material_estimated ? ", material.json" : "",
       specular_map ? ", specular.exr" : "", errors ? ", error.png" : "",
       ambiguity.pixels.empty() ? "" : ", ambiguity.exr",
@@ -331,7 +336,8 @@ void RunEval(const EvalOptions& o) {
   if (!o.error_map.empty()) {
     io::WriteSingleOutputFile(o.error_map, o.common.overwrite, {o.estimate, o.ground_truth, o.mask},
                               [&](const std::string& temp) {
-                                io::WriteErrorMap(temp, m.error_deg, mask, ErrorScale(m));
+                                io::WriteErrorMap(temp, m.error_deg, mask,
+                                                  io::ErrorMapScale(m.error_deg, mask));
                               });
   }
   std::printf("%s\n", MetricsJson(m).dump(2).c_str());

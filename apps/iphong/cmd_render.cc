@@ -1,6 +1,7 @@
 // `iphong render SCENE.json -o DIR`: one image with all lights, or with --per-light a DiLiGenT
 // dataset (one image per light) with exact ground truth.
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <optional>
 
 #include "core/errors.h"
@@ -8,6 +9,7 @@
 #include "io/output_folder.h"
 #include "io/scene_file.h"
 #include "iphong/commands.h"
+#include "iphong/console.h"
 
 namespace iphong::cli {
 namespace {
@@ -51,7 +53,10 @@ void RunRender(const RenderCommandOptions& o) {
 
   render::RenderOutput out;
   try {
+    Progress progress("render", o.common.talk());
+    file.options.progress = [&progress](double f) { progress.Update(f); };
     out = render::Render(file.scene, file.options, o.per_light);
+    file.options.progress = nullptr;
   } catch (const ResourceError& e) {
     throw ResourceError(o.scene_path + ": " + e.what());
   } catch (const std::invalid_argument& e) {
@@ -67,12 +72,22 @@ void RunRender(const RenderCommandOptions& o) {
 
   std::size_t triangles = 0;
   for (const auto& object : file.scene.objects) triangles += object.mesh.triangle_count();
-  std::printf(
+  PrintJson(o.common, nlohmann::json({{"output", o.output_dir},
+                                      {"width", file.scene.camera.width},
+                                      {"height", file.scene.camera.height},
+                                      {"triangles", triangles},
+                                      {"lights", file.scene.lighting.lights.size()},
+                                      {"images", o.per_light ? out.per_light.size() : 1},
+                                      {"visible_pixels", out.mask.count()},
+                                      {"raster_seconds", out.raster_seconds},
+                                      {"shade_seconds", out.shade_seconds}})
+                          .dump(2));
+  Say(o.common,
       "Rendered %dx%d, %zu triangles, %zu lights, %s shading: raster %.3f s, shading %.3f s\n",
       file.scene.camera.width, file.scene.camera.height, triangles,
       file.scene.lighting.lights.size(), render::ShadingName(file.options.shading).c_str(),
       out.raster_seconds, out.shade_seconds);
-  std::printf(
+  Say(o.common,
       "Wrote %s: %s, mask.png, normals.exr/.png, Normal_gt.mat, depth.exr, albedo.exr, "
       "material.json, render.json\n",
       o.output_dir.c_str(),
@@ -109,6 +124,7 @@ void AddRenderCommand(CLI::App& app) {
   AddOverwriteOption(cmd, o->common);
   AddThreadsOption(cmd, o->common);
   AddMemoryOption(cmd, o->common);
+  AddReportOptions(cmd, o->common);
   cmd->callback([o] { RunRender(*o); });
 }
 

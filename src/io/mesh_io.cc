@@ -6,6 +6,7 @@
 // OpenMesh's IO header must come before the mesh kernel.
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <cstdio>
 
 #include <algorithm>
 #include <cstring>
@@ -184,9 +185,34 @@ void SaveMesh(const std::string& path, const geometry::TriangleMesh& mesh,
       om.set_color(handles[v], {byte(c[0]), byte(c[1]), byte(c[2])});
     }
   }
+  const std::string ext = fs::path(path).extension().string();
+  if (vertex_colors && ext == ".obj") {
+    // OpenMesh's OBJ writer has no vertex colours (it fails on the option); the common extension
+    // "v x y z r g b" (MeshLab, Blender, CloudCompare, Open3D read it) is written here.
+    std::string text = "# iphong: vertex colours as 'v x y z r g b' (sRGB, 0-1)\n";
+    char line[160];
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+      const Vec3d& p = mesh.positions[v];
+      const auto c = om.color(handles[v]);
+      std::snprintf(line, sizeof line, "v %.9g %.9g %.9g %.4g %.4g %.4g\n", p.x(), p.y(), p.z(),
+                    c[0] / 255.0, c[1] / 255.0, c[2] / 255.0);
+      text += line;
+    }
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+      const auto n = om.normal(handles[v]);
+      std::snprintf(line, sizeof line, "vn %.6g %.6g %.6g\n", n[0], n[1], n[2]);
+      text += line;
+    }
+    for (const auto& tri : mesh.triangles) {
+      std::snprintf(line, sizeof line, "f %d//%d %d//%d %d//%d\n", tri[0] + 1, tri[0] + 1,
+                    tri[1] + 1, tri[1] + 1, tri[2] + 1, tri[2] + 1);
+      text += line;
+    }
+    WriteFileVerified(path, text);
+    return;
+  }
   OpenMesh::IO::Options io_options = OpenMesh::IO::Options::VertexNormal;
   if (vertex_colors) io_options += OpenMesh::IO::Options::VertexColor;
-  const std::string ext = fs::path(path).extension().string();
   if (ext == ".ply") io_options += OpenMesh::IO::Options::Binary;
   // Into memory first: OpenMesh reports success on a full disk; the verified write does not.
   std::ostringstream bytes(std::ios::binary);

@@ -54,7 +54,7 @@ SurfaceFiles WriteSurfaceFiles(OutputFolder& out, const std::string& prefix,
   SaveMesh(file("mesh.ply"), mesh, options.albedo ? &colors : nullptr);
   files.names.push_back("mesh.ply");
   if (options.obj) {
-    SaveMesh(file("mesh.obj"), mesh);
+    SaveMesh(file("mesh.obj"), mesh, options.albedo ? &colors : nullptr);
     files.names.push_back("mesh.obj");
   }
   if (!mesh.triangles.empty()) {

@@ -5,11 +5,13 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
 #include "io/dataset.h"
 #include "io/image_io.h"
+#include "render/preview.h"
 
 namespace iphong::io {
 
@@ -64,10 +66,38 @@ ImageF ReadNormalMap(const std::string& path, bool directx, Mask* mask, const Me
   return xyz;
 }
 
+double ErrorMapScale(const ImageF& error_deg, const Mask& mask) {
+  std::vector<float> errors;
+  for (std::size_t p = 0; p < mask.inside.size(); ++p) {
+    if (mask.inside[p] && std::isfinite(error_deg.pixels[p])) errors.push_back(error_deg.pixels[p]);
+  }
+  if (errors.empty()) return 1;
+  const std::size_t k = static_cast<std::size_t>(0.95 * (errors.size() - 1));
+  std::nth_element(errors.begin(), errors.begin() + k, errors.end());
+  const double top = std::max<double>(errors[k], 1e-6);
+  const double decade = std::pow(10.0, std::floor(std::log10(top)));
+  for (double step : {1.0, 2.0, 5.0, 10.0}) {
+    if (step * decade >= top * (1 - 1e-9)) return step * decade;
+  }
+  return 10 * decade;
+}
+
 void WriteErrorMap(const std::string& path, const ImageF& error_deg, const Mask& mask,
-                   double max_deg) {
+                   double max_deg, const std::string& unit) {
   const int w = error_deg.width, h = error_deg.height;
-  const int bar = std::max(60, w / 8);
+  const double font = std::max(0.35, h / 900.0);
+  // The labels first, so the bar is as wide as they need and none is cut off.
+  std::vector<std::string> labels;
+  int label_width = 0, baseline = 0;
+  for (int tick = 0; tick <= 4; ++tick) {
+    char label[32];
+    std::snprintf(label, sizeof label, "%.3g", max_deg * tick / 4);
+    labels.push_back(label);
+    label_width = std::max(
+        label_width, cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, font, 1, &baseline).width);
+  }
+  const int ramp_width = std::max(12, w / 32);
+  const int bar = 10 + ramp_width + 4 + label_width + 8;
   cv::Mat gray(h, w, CV_8UC1, cv::Scalar(0));
   for (int row = 0; row < h; ++row)
     for (int col = 0; col < w; ++col) {
@@ -82,8 +112,8 @@ void WriteErrorMap(const std::string& path, const ImageF& error_deg, const Mask&
     for (int col = 0; col < w; ++col)
       canvas.at<cv::Vec3b>(row, col) =
           mask.at(col, row) ? colored.at<cv::Vec3b>(row, col) : cv::Vec3b(0, 0, 0);
-  // Scale bar: top = max_deg, bottom = 0, with labels.
-  const int top = 20, bottom = h - 20, x0 = w + 10, x1 = w + 10 + bar / 4;
+  // Scale bar: top = max_deg, bottom = 0, labels to its right.
+  const int top = 20, bottom = h - 12, x0 = w + 10, x1 = w + 10 + ramp_width;
   cv::Mat ramp(std::max(bottom - top, 1), 1, CV_8UC1);
   for (int i = 0; i < ramp.rows; ++i)
     ramp.at<unsigned char>(i, 0) = 255 - 255 * i / std::max(ramp.rows - 1, 1);
@@ -91,15 +121,12 @@ void WriteErrorMap(const std::string& path, const ImageF& error_deg, const Mask&
   cv::applyColorMap(ramp, ramp_colored, cv::COLORMAP_JET);
   for (int i = 0; i < ramp.rows; ++i)
     cv::line(canvas, {x0, top + i}, {x1, top + i}, ramp_colored.at<cv::Vec3b>(i, 0));
-  const double font = std::max(0.35, h / 900.0);
-  char label[32];
   for (int tick = 0; tick <= 4; ++tick) {
     const int y = bottom - (bottom - top) * tick / 4;
-    std::snprintf(label, sizeof label, "%g", max_deg * tick / 4);
-    cv::putText(canvas, label, {x1 + 4, y + 4}, cv::FONT_HERSHEY_SIMPLEX, font,
+    cv::putText(canvas, labels[tick], {x1 + 4, y + 4}, cv::FONT_HERSHEY_SIMPLEX, font,
                 cv::Scalar(0, 0, 0));
   }
-  cv::putText(canvas, "deg", {x0, top - 6}, cv::FONT_HERSHEY_SIMPLEX, font, cv::Scalar(0, 0, 0));
+  cv::putText(canvas, unit, {x0, top - 6}, cv::FONT_HERSHEY_SIMPLEX, font, cv::Scalar(0, 0, 0));
   ImageF image(w + bar, h, 3);
   for (int row = 0; row < h; ++row)
     for (int col = 0; col < w + bar; ++col) {
@@ -107,6 +134,58 @@ void WriteErrorMap(const std::string& path, const ImageF& error_deg, const Mask&
       for (int c = 0; c < 3; ++c) image.at(col, row)[c] = bgr[2 - c] / 255.0f;  // BGR → RGB
     }
   WriteImage(path, image, {8, Encoding::kLinear});
+}
+
+void WriteAlbedoPicture(const std::string& path, const ImageF& albedo, const Mask& mask) {
+  const float scale = render::AlbedoDisplayScale(albedo);
+  ImageF picture(albedo.width, albedo.height, 3);
+  for (std::size_t p = 0; p < mask.inside.size(); ++p) {
+    if (!mask.inside[p]) continue;
+    for (int c = 0; c < 3; ++c) {
+      picture.pixels[3 * p + c] =
+          scale * albedo.pixels[p * albedo.channels + std::min(c, albedo.channels - 1)];
+    }
+  }
+  WriteImage(path, picture, {8, Encoding::kSrgb});
+}
+
+ImageF LabelTiles(const ImageF& sheet, int tile_width, int tile_height, int label_height,
+                  const std::vector<std::string>& labels) {
+  const int columns = std::max(1, sheet.width / tile_width);
+  const int rows = (static_cast<int>(labels.size()) + columns - 1) / columns;
+  ImageF out(sheet.width, sheet.height + rows * label_height, 3);
+  cv::Mat canvas(out.height, out.width, CV_8UC3, cv::Scalar(64, 64, 64));
+  for (int row = 0; row < rows; ++row)
+    for (int y = 0; y < tile_height && row * tile_height + y < sheet.height; ++y)
+      for (int x = 0; x < sheet.width; ++x) {
+        const float* v = sheet.at(x, row * tile_height + y);
+        cv::Vec3b& c = canvas.at<cv::Vec3b>(row * (tile_height + label_height) + y, x);
+        for (int k = 0; k < 3; ++k)
+          c[2 - k] =
+              static_cast<unsigned char>(std::clamp(LinearToSrgb(v[k]), 0.0f, 1.0f) * 255 + 0.5f);
+      }
+  const double font = std::max(0.35, label_height / 50.0);
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    const int col = static_cast<int>(i) % columns, row = static_cast<int>(i) / columns;
+    int baseline = 0;
+    double fitted = font;  // narrowed until the label fits its tile
+    cv::Size size = cv::getTextSize(labels[i], cv::FONT_HERSHEY_SIMPLEX, fitted, 1, &baseline);
+    if (size.width > tile_width - 8) {
+      fitted *= (tile_width - 8.0) / size.width;
+      size = cv::getTextSize(labels[i], cv::FONT_HERSHEY_SIMPLEX, fitted, 1, &baseline);
+    }
+    const int x = col * tile_width + std::max(0, (tile_width - size.width) / 2);
+    const int y =
+        row * (tile_height + label_height) + tile_height + (label_height + size.height) / 2;
+    cv::putText(canvas, labels[i], {x, y}, cv::FONT_HERSHEY_SIMPLEX, fitted,
+                cv::Scalar(235, 235, 235), 1, cv::LINE_AA);
+  }
+  for (int row = 0; row < out.height; ++row)
+    for (int col = 0; col < out.width; ++col) {
+      const cv::Vec3b bgr = canvas.at<cv::Vec3b>(row, col);
+      for (int k = 0; k < 3; ++k) out.at(col, row)[k] = SrgbToLinear(bgr[2 - k] / 255.0f);
+    }
+  return out;
 }
 
 }  // namespace iphong::io

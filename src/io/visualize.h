@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "core/resources.h"
 #include "core/types.h"
@@ -23,9 +24,24 @@ ImageF NormalsFromPicture(const ImageF& picture, bool directx, Mask* mask);
 ImageF ReadNormalMap(const std::string& path, bool directx, Mask* mask,
                      const MemoryLimit& memory = {});
 
+// The scale an error map is drawn to: the 99th percentile of the errors inside the mask, rounded
+// up to 1, 2 or 5 × 10^k (at least 1e-6), so the map shows where the error is whatever
+// its size (a 0.08° error on a 0-10° scale is uniformly blue).
+double ErrorMapScale(const ImageF& error_deg, const Mask& mask);
+
 // Angular error (degrees, 1 channel) as a colour map from 0 to `max_deg` with a labelled scale
 // bar on the right; black outside the mask. Written as an 8-bit PNG (atomically).
+// `unit` titles the scale ("deg"; "rms" for residuals).
 void WriteErrorMap(const std::string& path, const ImageF& error_deg, const Mask& mask,
-                   double max_deg);
+                   double max_deg, const std::string& unit = "deg");
+
+// An albedo (or any linear colour image) as people look at it: scaled so its 99th percentile is
+// 0.8 (render::AlbedoDisplayScale; albedos absorb the light intensities), sRGB, 8-bit.
+void WriteAlbedoPicture(const std::string& path, const ImageF& albedo, const Mask& mask);
+
+// A sheet of tiles (tile_width × tile_height, left to right, top to bottom; linear RGB) with a
+// strip of label_height pixels under each row of tiles, each tile's label centred in it.
+ImageF LabelTiles(const ImageF& sheet, int tile_width, int tile_height, int label_height,
+                  const std::vector<std::string>& labels);
 
 }  // namespace iphong::io

@@ -41,6 +41,32 @@ ImageF RenderPreview(const geometry::TriangleMesh& mesh, const PreviewOptions& o
   SceneObject object;
   object.name = "preview";
   object.mesh = mesh;
+  if (options.max_wall_deg < 90) {
+    const double min_nz = std::cos(options.max_wall_deg * M_PI / 180);
+    geometry::TriangleMesh& m = object.mesh;
+    std::size_t kept = 0;
+    for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+      // Steep by its own shape, or at a pixel whose normal is grazing (the outermost ring of a
+      // silhouette, where the height of each pixel depends on how far its centre is from the
+      // true outline: a staircase).
+      bool steep = std::abs(geometry::FaceNormal(mesh, t).z()) < min_nz;
+      for (int k = 0; k < 3 && !m.corner_normals.empty(); ++k) {
+        steep = steep || std::abs(mesh.corner_normals[3 * t + k].z()) < min_nz;
+      }
+      if (steep) continue;
+      m.triangles[kept] = m.triangles[t];
+      if (!m.corner_normals.empty()) {
+        for (int k = 0; k < 3; ++k) m.corner_normals[3 * kept + k] = m.corner_normals[3 * t + k];
+      }
+      ++kept;
+    }
+    if (kept > 0) {  // a mesh of walls only is shown as it is
+      m.triangles.resize(kept);
+      if (!m.corner_normals.empty()) m.corner_normals.resize(3 * kept);
+    } else {
+      m = mesh;
+    }
+  }
   Vec3d centroid = Vec3d::Zero();
   for (const Vec3d& p : mesh.positions) centroid += p;
   centroid /= static_cast<double>(mesh.positions.size());

@@ -402,6 +402,8 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
   if (per_light)
     for (int j = 0; j < lights; ++j) light_sets.push_back(j);
   std::vector<ImageF> images;
+  const double steps = light_sets.size() + 1.0;  // the first step: raster and shadow maps
+  if (options.progress) options.progress(1 / steps);
   for (int only_light : light_sets) {
     ImageF image(camera.width, camera.height, 3);
     if (options.shading == Shading::kPhong) {
@@ -435,6 +437,7 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
       }
     }
     images.push_back(std::move(image));
+    if (options.progress) options.progress((images.size() + 1) / steps);
   }
 
   RenderOutput out;

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -62,6 +63,9 @@ struct RenderOptions {
   NoiseOptions noise;
   int threads = 0;     // 0 = all cores
   MemoryLimit memory;  // Render refuses (ResourceError) what would not fit
+  // Called from the calling thread with the fraction done (shadow maps, then one image per
+  // light set), for long renders' progress.
+  std::function<void(double)> progress;
 
   std::string Validate() const;
 };

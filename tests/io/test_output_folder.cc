@@ -8,8 +8,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "error_of.h"
 #include "core/errors.h"
+#include "error_of.h"
 #include "io/files.h"
 #include "io/output_folder.h"
 

@@ -251,7 +251,8 @@ TEST_F(TempDir, MeshSaveLoadRoundTrip) {
   std::vector<Vec3f> colors(sphere.positions.size(), Vec3f(0.2f, 0.4f, 0.6f));
   SaveMesh(Path("sphere.ply"), sphere, &colors);
   SaveMesh(Path("sphere.obj"), sphere);
-  for (const std::string name : {"sphere.ply", "sphere.obj"}) {
+  SaveMesh(Path("coloured.obj"), sphere, &colors);  // written by iphong: OpenMesh cannot
+  for (const std::string name : {"sphere.ply", "sphere.obj", "coloured.obj"}) {
     const geometry::TriangleMesh back = LoadMesh(Path(name));
     ASSERT_EQ(back.positions.size(), sphere.positions.size()) << name;
     ASSERT_EQ(back.triangles.size(), sphere.triangles.size()) << name;
@@ -267,6 +268,10 @@ TEST_F(TempDir, MeshSaveLoadRoundTrip) {
   std::string header((std::istreambuf_iterator<char>(ply)), {});
   EXPECT_NE(header.find("format binary_little_endian"), std::string::npos);
   EXPECT_NE(header.find("property uchar red"), std::string::npos);
+  // The OBJ's colours: sRGB of 0.2 linear is 0.4845 (124/255).
+  std::ifstream obj(Path("coloured.obj"));
+  std::string text((std::istreambuf_iterator<char>(obj)), {});
+  EXPECT_NE(text.find(" 0.4863 0.6667 0.7961\n"), std::string::npos) << text.substr(0, 200);
   EXPECT_EQ(ErrorOf([&] { LoadMesh(Path("none.obj")); }), Path("none.obj") + ": no such file");
 }
 
