@@ -347,7 +347,7 @@ void RunEval(const EvalOptions& o) {
 
 void AddNormalsCommand(CLI::App& app) {
   auto o = std::make_shared<NormalsCommandOptions>();
-  auto* cmd = app.add_subcommand("normals", "Recover normals and albedo from a dataset directory");
+  auto* cmd = app.add_subcommand("normals", "Recover normals and albedo from a capture folder (DiLiGenT, UW, RTI .lp, images + lights)");
   cmd->add_option("dataset", o->dataset,
                   "Capture folder: DiLiGenT, UW, RTI .lp, or a folder of images with a light file")
       ->required();

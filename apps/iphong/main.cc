@@ -28,10 +28,15 @@ int main(int argc, char** argv) {
   CLI::App app{
       "iphong: surface normals, heights and materials from photographs by inverting the Phong "
       "reflection model, and a forward Phong renderer with exact ground truth."};
+  app.name("iphong");
   app.set_version_flag("--version", std::string("iphong ") + iphong::kVersion);
   app.require_subcommand(1);
   app.footer(iphong::cli::kExitCodes);
   iphong::cli::AddAllCommands(app);
+  if (argc == 1) {  // bare `iphong`: what it can do, not "A subcommand is required"
+    std::fputs(app.help().c_str(), stdout);
+    return 0;
+  }
   // CLI11 reports an unknown command as "A subcommand is required"; say what was typed.
   if (argc > 1 && argv[1][0] != '-') {
     std::string known;

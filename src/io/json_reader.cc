@@ -119,7 +119,11 @@ Vec3d JsonReader::Vector3(const std::string& key, const Vec3d& fallback) const {
 void JsonReader::OnlyKeys(const std::set<std::string>& known) const {
   if (!value_.is_object()) Fail("expected an object");
   for (const auto& item : value_.items()) {
-    if (!known.count(item.key())) Fail("unknown field '" + item.key() + "'");
+    if (!known.count(item.key())) {
+      std::string valid;
+      for (const std::string& k : known) valid += (valid.empty() ? "" : ", ") + k;
+      Fail("unknown field '" + item.key() + "' (valid: " + valid + ")");
+    }
   }
 }
 

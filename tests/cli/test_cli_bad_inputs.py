@@ -321,3 +321,9 @@ def test_text_files_from_windows_editors_are_read(rendered, tmp_path):
     code, out, err = run("normals", ds, "-o", tmp_path / "out")
     assert code == 0, err
     assert "mean 0.00 deg" in out
+
+
+def test_bare_iphong_prints_the_help():
+    code, stdout, stderr = run()
+    assert code == 0 and stderr == ""
+    assert stdout.startswith("iphong: ") and "Usage: iphong" in stdout and "normals" in stdout

@@ -180,3 +180,4 @@ def test_integrate_takes_diligent_ground_truth_without_flags(tmp_path):
         # A few silhouette normals tip past 90°: clamped to grazing and counted.
         assert 0 < report["back_facing_pixels"] < 0.02 * report["pixels"]
         assert "face away from the camera: taken as grazing" in stderr
+

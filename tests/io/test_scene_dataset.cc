@@ -78,7 +78,9 @@ TEST_F(TempDir, SceneErrorsNameTheFileAndTheField) {
   EXPECT_EQ(
       error(
           R"({"lights": [{"direction": [0,0,1]}], "objects": [{"shape": "sphere", "raduis": 1}]})"),
-      file + "objects[0]: unknown field 'raduis'");
+      file +
+          "objects[0]: unknown field 'raduis' (valid: albedo_texture, center, material, name, "
+          "radius, shape, subdivisions, transform)");
   EXPECT_EQ(
       error(
           R"({"lights": [{"direction": [0,0,1]}], "objects": [{"shape": "sphere", "radius": -1}]})"),
