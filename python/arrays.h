@@ -121,21 +121,43 @@ inline std::string ToText(const py::handle& value, const std::string& what) {
   return value.cast<std::string>();
 }
 
-// From numpy: a (H, W) boolean mask (None = everything) and a (H, W, 3) float image.
+// `expected` rows of 3 numbers, (expected, 3).
+inline std::vector<Vec3d> ToRows(const py::object& value, std::size_t expected, const char* what) {
+  auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(value);
+  if (!a) PyErr_Clear();
+  if (!a || a.ndim() != 2 || a.shape(1) != 3 || static_cast<std::size_t>(a.shape(0)) != expected) {
+    throw std::invalid_argument(std::string(what) + " must have shape (" +
+                                std::to_string(expected) + ", 3)");
+  }
+  std::vector<Vec3d> rows(expected);
+  for (std::size_t i = 0; i < expected; ++i) rows[i] = Vec3d(a.at(i, 0), a.at(i, 1), a.at(i, 2));
+  return rows;
+}
+
+// From numpy: a mask (None = everything) of shape (H, W), or (H, W, C) as a picture stores it
+// (a pixel is inside where any channel is non-zero), and a (H, W, 3) float image.
 inline Mask ToMask(const py::object& value, int width, int height) {
   if (value.is_none()) return Mask(width, height, true);
-  auto a = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(value);
-  if (!a || a.ndim() != 2 || a.shape(0) != height || a.shape(1) != width) {
+  auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
+  if (!a) PyErr_Clear();
+  const bool shape_ok = a &&
+                        (a.ndim() == 2 || (a.ndim() == 3 && a.shape(2) >= 1 && a.shape(2) <= 4)) &&
+                        a.shape(0) == height && a.shape(1) == width;
+  if (!shape_ok) {
     throw std::invalid_argument("mask must have shape (H, W) = (" + std::to_string(height) + ", " +
-                                std::to_string(width) + ")");
+                                std::to_string(width) + "), or (H, W, channels)");
   }
+  const std::size_t channels = a.ndim() == 3 ? a.shape(2) : 1;
+  const std::size_t colour = std::min<std::size_t>(channels, 3);  // alpha is not the object
   Mask mask(width, height, false);
-  for (std::size_t p = 0; p < mask.inside.size(); ++p) mask.inside[p] = a.data()[p];
+  for (std::size_t p = 0; p < mask.inside.size(); ++p)
+    for (std::size_t c = 0; c < colour; ++c) mask.inside[p] |= a.data()[p * channels + c] != 0;
   return mask;
 }
 
 inline ImageF ToImage(const py::object& value, const char* what) {
   auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
+  if (!a) PyErr_Clear();
   if (!a || a.ndim() != 3 || a.shape(2) != 3) {
     throw std::invalid_argument(std::string(what) + " must have shape (H, W, 3)");
   }

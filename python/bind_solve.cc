@@ -16,18 +16,6 @@ namespace iphong::python {
 namespace {
 
 using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
-using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
-
-std::vector<Vec3d> Rows(const py::object& value, std::size_t expected, const char* what) {
-  DoubleArray a = DoubleArray::ensure(value);
-  if (!a || a.ndim() != 2 || a.shape(1) != 3 || static_cast<std::size_t>(a.shape(0)) != expected) {
-    throw std::invalid_argument(std::string(what) + " must have shape (" +
-                                std::to_string(expected) + ", 3)");
-  }
-  std::vector<Vec3d> rows(expected);
-  for (std::size_t i = 0; i < expected; ++i) rows[i] = Vec3d(a.at(i, 0), a.at(i, 1), a.at(i, 2));
-  return rows;
-}
 
 }  // namespace
 
@@ -44,7 +32,7 @@ void BindSolve(py::module_& m) {
         }
         const std::size_t k = images.shape(0);
         const int h = static_cast<int>(images.shape(1)), w = static_cast<int>(images.shape(2));
-        std::vector<Vec3d> dirs = Rows(light_directions, k, "light_directions");
+        std::vector<Vec3d> dirs = ToRows(light_directions, k, "light_directions");
         for (Vec3d& d : dirs) {
           if (!(d.norm() > 0) || !d.allFinite())
             throw std::invalid_argument("zero or non-finite light direction");
@@ -52,7 +40,7 @@ void BindSolve(py::module_& m) {
         }
         const std::vector<Vec3d> intensities =
             light_intensities.is_none() ? std::vector<Vec3d>(k, Vec3d::Ones())
-                                        : Rows(light_intensities, k, "light_intensities");
+                                        : ToRows(light_intensities, k, "light_intensities");
         const Mask mask = ToMask(mask_in, w, h);
         std::vector<const float*> pointers;
         for (std::size_t j = 0; j < k; ++j) pointers.push_back(images.data() + j * h * w * 3);
@@ -182,12 +170,13 @@ the result has ambiguity_deg (H, W): the angle the data alone leaves open per pi
         const solve::AngularErrorMetrics m =
             solve::CompareNormals(e, g, ToMask(mask_in, e.width, e.height));
         py::dict out;
-        out["mean_deg"] = m.mean_deg;
-        out["median_deg"] = m.median_deg;
-        out["below_5_deg"] = m.below_5_deg;
-        out["below_10_deg"] = m.below_10_deg;
-        out["below_20_deg"] = m.below_20_deg;
-        out["pixels"] = m.pixels;
+        // The names of metrics.json and `iphong eval`.
+        out["mean_angular_error_deg"] = m.mean_deg;
+        out["median_angular_error_deg"] = m.median_deg;
+        out["fraction_below_5_deg"] = m.below_5_deg;
+        out["fraction_below_10_deg"] = m.below_10_deg;
+        out["fraction_below_20_deg"] = m.below_20_deg;
+        out["evaluated_pixels"] = m.pixels;
         out["error_deg"] = ToArray(m.error_deg);
         return out;
       },

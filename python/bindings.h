@@ -9,5 +9,6 @@ void BindReflectance(pybind11::module_& m);
 void BindRender(pybind11::module_& m);
 void BindSolve(pybind11::module_& m);
 void BindIntegrate(pybind11::module_& m);
+void BindIo(pybind11::module_& m);
 
 }  // namespace iphong::python

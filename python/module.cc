@@ -29,4 +29,5 @@ PYBIND11_MODULE(_core, m) {
   iphong::python::BindRender(m);
   iphong::python::BindSolve(m);
   iphong::python::BindIntegrate(m);
+  iphong::python::BindIo(m);
 }

@@ -13,20 +13,197 @@ from ._core import (  # noqa: F401
     MaterialPreset,
     PointLight,
     __version__,
-    angular_error,
-    estimate_normals,
     height_to_mesh,
     integrate,
     material,
     material_presets,
     normals_from_height,
-    shade,
 )
 
+import functools as _functools
 import json as _json
 import os as _os
 
+import numpy as _np
+
 from . import _core
+
+
+def _short_type_errors(function):
+    """pybind11 reports a wrong argument type with the whole call, arrays printed in full; this
+    keeps the first line and the expected signature, and names the types that were passed."""
+    @_functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        try:
+            return function(*args, **kwargs)
+        except TypeError as error:
+            text = str(error)
+            if "incompatible function arguments" not in text:
+                raise
+            lines = text.split("\n")
+            signature = next((line.strip() for line in lines if line.strip().startswith("1.")), "")
+            passed = ", ".join([type(a).__name__ for a in args] +
+                               [f"{k}={type(v).__name__}" for k, v in kwargs.items()])
+            raise TypeError(f"{lines[0]} expected {signature[3:]}; got ({passed})") from None
+    return wrapper
+
+
+_MATERIAL_KEYS = ("ka", "kd", "ks", "shininess")
+
+
+def _material_dict(value, extra=()):
+    """A material given as an iphong.Material or a dict, as a dict; unknown keys are an error."""
+    if isinstance(value, Material):
+        return {"ka": list(value.ka), "kd": list(value.kd), "ks": list(value.ks),
+                "shininess": value.shininess}
+    if not isinstance(value, dict):
+        raise TypeError(f"material: expected an iphong.Material or a dict, got {type(value).__name__}")
+    valid = sorted(_MATERIAL_KEYS + tuple(extra))
+    for key in value:
+        if key not in valid:
+            raise ValueError(f"material: unknown key {key!r} (valid: {', '.join(valid)})")
+    return value
+
+
+@_short_type_errors
+def shade(normal, view=(0.0, 0.0, 1.0), material=None, lights=None, ambient=0.0, **kwargs):
+    if material is None or lights is None:
+        raise TypeError("shade: material and lights are required")
+    if isinstance(material, dict):
+        material = Material(**_material_dict(material))
+    return _core.shade(normal, view, material, lights, ambient, **kwargs)
+
+
+shade.__doc__ = _core.shade.__doc__
+
+
+def _linearize(values):
+    return _np.where(values <= 0.04045, values / 12.92, ((values + 0.055) / 1.055) ** 2.4)
+
+
+def _image_stack(images, k, encoding):
+    """images as (K, H, W, 3) float32 linear, with a message that says what to do otherwise."""
+    if encoding not in (None, "linear", "srgb"):
+        raise ValueError(f"encoding: expected None, 'linear' or 'srgb', got {encoding!r}")
+    try:
+        a = _np.asarray(images)
+    except Exception:  # ragged lists and the like
+        raise TypeError(f"images: expected a numpy array (K, H, W, 3), got {type(images).__name__}") from None
+    if a.dtype.kind not in "fiu" or a.dtype == bool:
+        raise TypeError(f"images: expected numbers, got an array of {a.dtype}")
+    if a.dtype.kind in "iu":
+        top = _np.iinfo(a.dtype).max
+        if encoding is None:
+            raise ValueError(
+                f"images: {a.dtype} values (0-{top}) would be used unscaled; pass floats in "
+                f"[0, 1] (images / {top}), or encoding='linear' or 'srgb' to have them scaled "
+                "(and the sRGB curve undone)")
+        a = a.astype(_np.float32) / top
+    a = a.astype(_np.float32, copy=False)
+    if encoding == "srgb":
+        a = _linearize(_np.clip(a, 0, 1)).astype(_np.float32)
+    shape = tuple(a.shape)
+    if a.ndim == 3:  # greyscale: (K, H, W)
+        if shape[0] != k and shape[2] == k:
+            raise ValueError(f"images: shape {shape} looks like (H, W, K); expected (K, H, W, 3) "
+                             "or (K, H, W): use numpy.moveaxis(images, 2, 0)")
+        a = _np.repeat(a[..., None], 3, axis=3)
+    elif a.ndim == 4:
+        if shape[0] != k and shape[2] == k:
+            raise ValueError(f"images: shape {shape} looks like (H, W, K, 3); expected "
+                             "(K, H, W, 3): use numpy.moveaxis(images, 2, 0)")
+        if shape[3] == 1:
+            a = _np.repeat(a, 3, axis=3)
+        elif shape[3] == 4:
+            a = a[..., :3]  # alpha is not light
+    else:
+        raise ValueError(f"images: shape {shape}; expected (K, H, W, 3) or (K, H, W)")
+    if a.shape[0] != k:
+        raise ValueError(f"images: {a.shape[0]} images for {k} light directions")
+    return _np.ascontiguousarray(a)
+
+
+@_short_type_errors
+def estimate_normals(images, light_directions, light_intensities=None, mask=None,
+                     model="phong", material=None, *args, encoding=None, **kwargs):
+    try:
+        k = len(light_directions)
+    except TypeError:
+        raise TypeError("light_directions: expected a (K, 3) array, got "
+                        f"{type(light_directions).__name__}") from None
+    images = _image_stack(images, k, encoding)
+    if material is not None:
+        material = dict(_material_dict(material, extra=("ambient", "model")))
+        if isinstance(material.get("kd"), (list, tuple)) and not any(material["kd"]):
+            del material["kd"]  # an iphong.Material's default kd 0: the albedo is unknown
+    return _core.estimate_normals(images, light_directions, light_intensities, mask, model,
+                                  material, *args, **kwargs)
+
+
+estimate_normals.__doc__ = _core.estimate_normals.__doc__ + """
+
+images may also be (K, H, W) greyscale, or integers (uint8, uint16) with encoding='linear' or
+'srgb' (scaled to [0, 1], the sRGB curve undone); float images with encoding='srgb' are
+linearized. mask may be (H, W) or an RGB picture (H, W, 3): inside where any channel is non-zero.
+material may be an iphong.Material (its kd, when not zero, is the known albedo) or a dict."""
+
+
+@_short_type_errors
+def angular_error(estimate, ground_truth, mask=None):
+    """Angular error between two normal maps (H, W, 3) over the mask where the ground truth is
+    non-zero: mean_angular_error_deg, median_angular_error_deg, fraction_below_{5,10,20}_deg,
+    evaluated_pixels (the names of metrics.json) and error_deg (H, W)."""
+    return _core.angular_error(estimate, ground_truth, mask)
+
+
+def _python_words(function):
+    """The writers' refusals are the command line's, which name its flag; say the argument."""
+    @_functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        try:
+            return function(*args, **kwargs)
+        except OSError as error:
+            raise type(error)(str(error).replace("--overwrite", "overwrite=True")) from None
+    return wrapper
+
+
+@_python_words
+@_short_type_errors
+def save_normals(path, normals, mask=None, *, convention="opengl", overwrite=False):
+    """Write a normal map as `iphong normals` does: .exr (or .tif) float xyz, 0 outside the mask;
+    .png a 16-bit picture (n + 1)/2 (convention 'opengl': green = +y, or 'directx'). The file
+    must be new unless overwrite; it appears complete or not at all."""
+    _core._save_normals(_path(path, "path"), normals, mask, convention, overwrite)
+
+
+@_python_words
+@_short_type_errors
+def save_mesh(path, height, mask=None, *, normals=None, albedo=None, pixel_size=1.0,
+              overwrite=False):
+    """Write the mesh of a height map (H, W; NaN = none) as `iphong integrate` does: .ply
+    (binary) or .obj, one vertex per pixel, vertex normals from normals (H, W, 3) and sRGB
+    vertex colours from albedo (H, W, 3) when given. Returns (vertices, triangles)."""
+    return _core._save_mesh(_path(path, "path"), height, mask, normals, albedo, pixel_size,
+                            overwrite)
+
+
+@_python_words
+@_short_type_errors
+def save_dataset(directory, images, light_directions, light_intensities=None, mask=None,
+                 normal_gt=None, *, format="png", bits=16, encoding=None, overwrite=False):
+    """Write a photometric-stereo dataset in the DiLiGenT layout, as `iphong render --per-light`
+    does (images 001.png ..., filenames.txt, light_directions.txt, light_intensities.txt,
+    mask.png; with normal_gt also Normal_gt.mat, normals.exr, normals.png), which load_dataset and
+    `iphong normals` read back. The folder must be new or empty (or an earlier save_dataset
+    output with overwrite) and appears complete or not at all."""
+    try:
+        k = len(light_directions)
+    except TypeError:
+        raise TypeError("light_directions: expected a (K, 3) array, got "
+                        f"{type(light_directions).__name__}") from None
+    _core._save_dataset(_path(directory, "directory"), _image_stack(images, k, encoding),
+                        light_directions, light_intensities, mask, normal_gt, format, bits,
+                        overwrite)
 
 
 def render(scene, per_light=False, max_memory_gb=None):
@@ -92,5 +269,8 @@ __all__ = [
     "materials",
     "normals_from_height",
     "render",
+    "save_dataset",
+    "save_mesh",
+    "save_normals",
     "shade",
 ]

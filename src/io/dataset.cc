@@ -456,6 +456,57 @@ std::string CheckDatasetLights(const render::Scene& scene) {
   return "";
 }
 
+void WriteDatasetFiles(OutputFolder& out, const std::string& prefix, const DatasetToWrite& d,
+                       const OutputSettings& settings) {
+  const std::size_t k = d.images.size();
+  if (k == 0) throw std::invalid_argument("a dataset needs at least one image");
+  const ImageF& first = *d.images[0];
+  for (const ImageF* image : d.images) {
+    if (image->width != first.width || image->height != first.height || image->channels != 3) {
+      throw std::invalid_argument("the images must all be " + SizeText(first.width, first.height) +
+                                  " RGB");
+    }
+  }
+  if (d.light_directions.size() != k ||
+      (!d.light_intensities.empty() && d.light_intensities.size() != k)) {
+    throw std::invalid_argument(std::to_string(k) + " images need " + std::to_string(k) +
+                                " light directions and intensities");
+  }
+  const Mask whole(first.width, first.height, true);
+  const Mask& mask = d.mask ? *d.mask : whole;
+  if (mask.width != first.width || mask.height != first.height) {
+    throw std::invalid_argument("the mask is " + SizeText(mask.width, mask.height) +
+                                ", the images " + SizeText(first.width, first.height));
+  }
+  if (d.normal_gt && (d.normal_gt->width != first.width || d.normal_gt->height != first.height ||
+                      d.normal_gt->channels != 3)) {
+    throw std::invalid_argument("the ground truth must be " + SizeText(first.width, first.height) +
+                                " x 3");
+  }
+  auto file = [&](const std::string& name) { return out.file(prefix + name); };
+  const std::string ext = settings.extension();
+  std::string names;
+  const int digits = std::max<int>(3, std::to_string(k).size());
+  for (std::size_t j = 0; j < k; ++j) {
+    std::string number = std::to_string(j + 1);
+    number.insert(0, digits - number.size(), '0');
+    WriteImage(file(number + ext), *d.images[j], settings.write_options());
+    names += number + ext + "\n";
+  }
+  WriteTextFile(file("filenames.txt"), names);
+  WriteTextFile(file("light_directions.txt"), Triples(d.light_directions));
+  WriteTextFile(file("light_intensities.txt"),
+                Triples(d.light_intensities.empty() ? std::vector<Vec3d>(k, Vec3d::Ones())
+                                                    : d.light_intensities));
+  WriteImage(file("mask.png"), MaskImage(mask), {8, Encoding::kLinear});
+  if (d.normal_gt) {
+    WriteImage(file("normals.exr"), *d.normal_gt);
+    WriteImage(file("normals.png"), NormalMapPicture(*d.normal_gt, mask), {16, Encoding::kLinear});
+    WriteNormalMat(file("Normal_gt.mat"), "Normal_gt", *d.normal_gt);
+  }
+  if (!d.material_json.empty()) WriteTextFile(file("material.json"), d.material_json);
+}
+
 void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const render::Scene& scene,
                        const render::RenderOptions& options, const render::RenderOutput& output,
                        const OutputSettings& settings, bool per_light) {
@@ -463,34 +514,29 @@ void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const rende
     if (std::string m = CheckDatasetLights(scene); !m.empty()) throw std::invalid_argument(m);
   }
   auto file = [&](const std::string& name) { return out.file(prefix + name); };
-  const std::string ext = settings.extension();
-  const WriteOptions image_options = settings.write_options();
+  const std::string material = MaterialJson(scene, options).dump(2) + "\n";
   if (per_light) {
-    std::string names;
-    std::vector<Vec3d> directions, intensities;
-    const int digits = std::max<int>(3, std::to_string(output.per_light.size()).size());
+    DatasetToWrite d;
     for (std::size_t j = 0; j < output.per_light.size(); ++j) {
-      std::string number = std::to_string(j + 1);
-      number.insert(0, digits - number.size(), '0');
-      WriteImage(file(number + ext), output.per_light[j], image_options);
-      names += number + ext + "\n";
-      directions.push_back(scene.lighting.lights[j].direction_cam);
-      intensities.push_back(scene.lighting.lights[j].diffuse_intensity);
+      d.images.push_back(&output.per_light[j]);
+      d.light_directions.push_back(scene.lighting.lights[j].direction_cam);
+      d.light_intensities.push_back(scene.lighting.lights[j].diffuse_intensity);
     }
-    WriteTextFile(file("filenames.txt"), names);
-    WriteTextFile(file("light_directions.txt"), Triples(directions));
-    WriteTextFile(file("light_intensities.txt"), Triples(intensities));
+    d.mask = &output.mask;
+    d.normal_gt = &output.normal_cam;
+    d.material_json = material;
+    WriteDatasetFiles(out, prefix, d, settings);
   } else {
-    WriteImage(file("image" + ext), output.image, image_options);
+    WriteImage(file("image" + settings.extension()), output.image, settings.write_options());
+    WriteImage(file("mask.png"), MaskImage(output.mask), {8, Encoding::kLinear});
+    WriteImage(file("normals.exr"), output.normal_cam);
+    WriteImage(file("normals.png"), NormalMapPicture(output.normal_cam, output.mask),
+               {16, Encoding::kLinear});
+    WriteNormalMat(file("Normal_gt.mat"), "Normal_gt", output.normal_cam);
+    WriteTextFile(file("material.json"), material);
   }
-  WriteImage(file("mask.png"), MaskImage(output.mask), {8, Encoding::kLinear});
-  WriteImage(file("normals.exr"), output.normal_cam);
-  WriteImage(file("normals.png"), NormalMapPicture(output.normal_cam, output.mask),
-             {16, Encoding::kLinear});
   WriteImage(file("depth.exr"), output.depth);
   WriteImage(file("albedo.exr"), output.albedo);
-  WriteNormalMat(file("Normal_gt.mat"), "Normal_gt", output.normal_cam);
-  WriteTextFile(file("material.json"), MaterialJson(scene, options).dump(2) + "\n");
   nlohmann::json meta;
   meta["generator"] = "iphong render";
   meta["images"] = per_light ? output.per_light.size() : 1;

@@ -26,6 +26,27 @@ geometry::HeightMapFrame FrameOf(const integrate::IntegrateOptions& options) {
   return frame;
 }
 
+HeightMesh MakeHeightMesh(const ImageF& height, const Mask& mask,
+                          const geometry::HeightMapFrame& frame, const ImageF* normals,
+                          const ImageF* continuity, const ImageF* albedo) {
+  geometry::HeightMeshOptions mesh_options;
+  mesh_options.normals = normals;
+  mesh_options.continuity = continuity;
+  std::vector<int> vertex_pixel;
+  HeightMesh out;
+  out.mesh = geometry::MeshFromHeightMap(height, mask, frame, mesh_options, &vertex_pixel);
+  if (albedo) {
+    const float scale = render::AlbedoDisplayScale(*albedo);
+    for (int p : vertex_pixel) {
+      const float* a = albedo->at(p % albedo->width, p / albedo->width);
+      const int last = albedo->channels - 1;
+      out.colors.emplace_back(scale * a[0], scale * a[std::min(1, last)],
+                              scale * a[std::min(2, last)]);
+    }
+  }
+  return out;
+}
+
 SurfaceFiles WriteSurfaceFiles(OutputFolder& out, const std::string& prefix,
                                const integrate::IntegrateResult& result, const ImageF& normals,
                                const Mask& mask, const geometry::HeightMapFrame& frame,
@@ -35,22 +56,12 @@ SurfaceFiles WriteSurfaceFiles(OutputFolder& out, const std::string& prefix,
   WriteImage(file("height.exr"), result.height);
   files.names.push_back("height.exr");
 
-  geometry::HeightMeshOptions mesh_options;
-  mesh_options.normals = &normals;
-  mesh_options.continuity = &result.continuity;
-  std::vector<int> vertex_pixel;
-  const geometry::TriangleMesh mesh =
-      geometry::MeshFromHeightMap(result.height, mask, frame, mesh_options, &vertex_pixel);
+  const HeightMesh built =
+      MakeHeightMesh(result.height, mask, frame, &normals, &result.continuity, options.albedo);
+  const geometry::TriangleMesh& mesh = built.mesh;
+  const std::vector<Vec3f>& colors = built.colors;
   files.vertices = mesh.positions.size();
   files.triangles = mesh.triangles.size();
-  std::vector<Vec3f> colors;
-  if (options.albedo) {
-    const float scale = render::AlbedoDisplayScale(*options.albedo);
-    for (int p : vertex_pixel) {
-      const float* a = options.albedo->at(p % options.albedo->width, p / options.albedo->width);
-      colors.emplace_back(scale * a[0], scale * a[1], scale * a[2]);
-    }
-  }
   SaveMesh(file("mesh.ply"), mesh, options.albedo ? &colors : nullptr);
   files.names.push_back("mesh.ply");
   if (options.obj) {

@@ -24,6 +24,17 @@ struct SurfaceFiles {
   double consistency_mean_deg = 0, consistency_median_deg = 0;
 };
 
+// The mesh of a height map (geometry::MeshFromHeightMap: per-vertex normals from `normals`,
+// edges with continuity below the cut not bridged) and, with an albedo, sRGB-ready vertex colours
+// scaled for display (render::AlbedoDisplayScale): what mesh.ply holds. Any pointer may be null.
+struct HeightMesh {
+  geometry::TriangleMesh mesh;
+  std::vector<Vec3f> colors;  // one per vertex, or empty
+};
+HeightMesh MakeHeightMesh(const ImageF& height, const Mask& mask,
+                          const geometry::HeightMapFrame& frame, const ImageF* normals,
+                          const ImageF* continuity, const ImageF* albedo);
+
 // Writes into `out` under `prefix` ("" or "sub/"): height.exr (float32, 1 channel, NaN outside the
 // mask: height toward the viewer, or depth for a perspective camera), mesh.ply (binary: the masked
 // pixels triangulated, per-vertex normals from `normals`, colours from the albedo when given; edges

@@ -19,7 +19,7 @@ LIGHTS = np.eye(3)
     ({"ks": -1}, ValueError, r"ks must be finite and >= 0"),
     ({"kss": 0.1}, ValueError, r"material: unknown key 'kss'"),
     ({"model": 3}, TypeError, r"material\['model'\]: expected a string"),
-    ([1, 2], TypeError, r"material: expected a dict"),
+    ([1, 2], TypeError, r"material: expected an iphong.Material or a dict"),
 ])
 def test_bad_material_dicts(material, error, pattern):
     with pytest.raises(error, match=pattern):

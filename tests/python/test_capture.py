@@ -40,9 +40,9 @@ def test_uw_gray_reads_linear_and_linear_is_right():
         result = iphong.estimate_normals(images, d["light_directions"], mask=d["mask"])
         errors[encoding] = iphong.angular_error(result["normals"], truth, d["mask"])
     # Measured: linear 5.1° mean, 4.2° median; sRGB 16.4° and 16.5°.
-    assert errors["linear"]["median_deg"] <= 5.0
-    assert errors["linear"]["mean_deg"] <= 6.0
-    assert errors["srgb"]["mean_deg"] >= 12.0
+    assert errors["linear"]["median_angular_error_deg"] <= 5.0
+    assert errors["linear"]["mean_angular_error_deg"] <= 6.0
+    assert errors["srgb"]["mean_angular_error_deg"] >= 12.0
 
 
 @needs_uw
