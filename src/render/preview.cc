@@ -46,14 +46,7 @@ ImageF RenderPreview(const geometry::TriangleMesh& mesh, const PreviewOptions& o
     geometry::TriangleMesh& m = object.mesh;
     std::size_t kept = 0;
     for (std::size_t t = 0; t < m.triangles.size(); ++t) {
-      // Steep by its own shape, or at a pixel whose normal is grazing (the outermost ring of a
-      // silhouette, where the height of each pixel depends on how far its centre is from the
-      // true outline: a staircase).
-      bool steep = std::abs(geometry::FaceNormal(mesh, t).z()) < min_nz;
-      for (int k = 0; k < 3 && !m.corner_normals.empty(); ++k) {
-        steep = steep || std::abs(mesh.corner_normals[3 * t + k].z()) < min_nz;
-      }
-      if (steep) continue;
+      if (std::abs(geometry::FaceNormal(mesh, t).z()) < min_nz) continue;
       m.triangles[kept] = m.triangles[t];
       if (!m.corner_normals.empty()) {
         for (int k = 0; k < 3; ++k) m.corner_normals[3 * kept + k] = m.corner_normals[3 * t + k];

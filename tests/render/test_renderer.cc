@@ -5,6 +5,7 @@
 
 #include "geometry/analytic.h"
 #include "geometry/primitives.h"
+#include "render/preview.h"
 #include "render/renderer.h"
 #include "render/shade_normal_map.h"
 
@@ -255,6 +256,27 @@ TEST(Renderer, InvalidScenesAndOptionsAreRejected) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("object 0"), std::string::npos) << e.what();
   }
+}
+
+TEST(Preview, LeavesOutSilhouetteWallsOnly) {
+  // A 4x4 flat square at height 0 and a wall rising from its top edge straight toward the viewer:
+  // the wall's normal is perpendicular to the view axis.
+  geometry::TriangleMesh mesh;
+  mesh.positions = {{0, 0, 0}, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}, {4, 4, 6}, {0, 4, 6}};
+  mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {3, 2, 4}, {3, 4, 5}};
+  geometry::ComputeFlatNormals(mesh);
+  auto picture = [](const geometry::TriangleMesh& m, double max_wall_deg) {
+    PreviewOptions options;
+    options.width = 64;
+    options.max_wall_deg = max_wall_deg;
+    return RenderPreview(m, options).pixels;
+  };
+  // The floor alone, framed the same (same vertices), is exactly what 80° leaves.
+  geometry::TriangleMesh floor = mesh;
+  floor.triangles.resize(2);
+  geometry::ComputeFlatNormals(floor);
+  EXPECT_EQ(picture(mesh, 80), picture(floor, 90));
+  EXPECT_NE(picture(mesh, 90), picture(floor, 90));  // 90° keeps the wall
 }
 
 }  // namespace
