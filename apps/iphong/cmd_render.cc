@@ -67,7 +67,11 @@ void RunRender(const RenderCommandOptions& o) {
                              ": nothing is visible: every object is outside the camera's view "
                              "(check the camera and the objects' positions and sizes)");
   }
-  io::WriteRenderOutput(output, "", file.scene, file.options, out, file.output, o.per_light);
+  {
+    Progress write("write", o.common.talk());
+    io::WriteRenderOutput(output, "", file.scene, file.options, out, file.output, o.per_light,
+                          [&write](double f) { write.Update(f); });
+  }
   output.Commit();
 
   std::size_t triangles = 0;

@@ -492,6 +492,7 @@ void WriteDatasetFiles(OutputFolder& out, const std::string& prefix, const Datas
     number.insert(0, digits - number.size(), '0');
     WriteImage(file(number + ext), *d.images[j], settings.write_options());
     names += number + ext + "\n";
+    if (d.progress) d.progress((j + 1.0) / k);
   }
   WriteTextFile(file("filenames.txt"), names);
   WriteTextFile(file("light_directions.txt"), Triples(d.light_directions));
@@ -509,7 +510,8 @@ void WriteDatasetFiles(OutputFolder& out, const std::string& prefix, const Datas
 
 void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const render::Scene& scene,
                        const render::RenderOptions& options, const render::RenderOutput& output,
-                       const OutputSettings& settings, bool per_light) {
+                       const OutputSettings& settings, bool per_light,
+                       const std::function<void(double)>& progress) {
   if (per_light) {
     if (std::string m = CheckDatasetLights(scene); !m.empty()) throw std::invalid_argument(m);
   }
@@ -525,6 +527,7 @@ void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const rende
     d.mask = &output.mask;
     d.normal_gt = &output.normal_cam;
     d.material_json = material;
+    d.progress = progress;
     WriteDatasetFiles(out, prefix, d, settings);
   } else {
     WriteImage(file("image" + settings.extension()), output.image, settings.write_options());

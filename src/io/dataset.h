@@ -98,6 +98,7 @@ struct DatasetToWrite {
   const Mask* mask = nullptr;            // nullptr: the whole image
   const ImageF* normal_gt = nullptr;     // nullptr: no ground truth
   std::string material_json;             // "" = none
+  std::function<void(double)> progress;  // the fraction of images written, when set
 };
 
 // Writes 001.<ext> ... (as `settings` say), filenames.txt, light_directions.txt,
@@ -113,7 +114,8 @@ void WriteDatasetFiles(OutputFolder& out, const std::string& prefix, const Datas
 // either way. Nothing is visible until the caller commits `out`.
 void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const render::Scene& scene,
                        const render::RenderOptions& options, const render::RenderOutput& output,
-                       const OutputSettings& settings, bool per_light);
+                       const OutputSettings& settings, bool per_light,
+                       const std::function<void(double)>& progress = {});
 
 // MATLAB files: an H×W×3 double array, as DiLiGenT's Normal_gt. The write is verified by reading
 // the file back (OutputError); the read checks the file's structure first, since matio reads a
