@@ -274,6 +274,7 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
   if (c.paths.empty()) {
     for (const std::string& name : c.names) c.paths.push_back((dir / name).string());
   }
+  if (c.paths.empty()) Fail(dir, "holds no images");  // every reader above needs at least one
 
   // Intensities.
   fs::path intensities = options.intensities;

@@ -197,10 +197,12 @@ LightFile ParseLightFile(const std::string& text, const std::string& source, std
     if (!lines.empty()) first_line = lines.front().first;
     // RTI: "name lx ly lz" — a first field that is not a number.
     const std::string& probe = lines.empty() ? std::string() : lines.front().second;
+    // A first field that is not a whole number ("001.png" starts like one).
     char* end = nullptr;
     const char* start = probe.c_str() + probe.find_first_not_of(" \t");
     std::strtod(start, &end);
-    const bool named = !probe.empty() && end == start;
+    const bool named =
+        !probe.empty() && (end == start || (*end != '\0' && std::strchr(" \t,", *end) == nullptr));
     file.format = named ? "RTI .lp" : counted ? "count + directions" : "directions";
     for (const auto& [number, line] : lines) {
       if (line.find('\0') != std::string::npos) Fail(source, "not a text file", number);
@@ -226,6 +228,7 @@ LightFile ParseLightFile(const std::string& text, const std::string& source, std
       file.directions.push_back(Triple(line.substr(starts[starts.size() - 3]), source, number));
     }
   }
+  if (file.directions.empty()) Fail(source, "lists no lights");
   if (expected > 0 && file.directions.size() != expected) {
     Fail(source, "has " + std::to_string(file.directions.size()) + " lights for " +
                      std::to_string(expected) + " images");

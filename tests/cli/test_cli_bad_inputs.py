@@ -137,6 +137,29 @@ def missing_filenames(ds):
         "ds/light_directions.txt"
 
 
+def as_rti(ds, lines):
+    """The dataset without its DiLiGenT lists, its lights in an RTI .lp."""
+    for name in ["filenames.txt", "light_directions.txt", "light_intensities.txt"]:
+        (ds / name).unlink()
+    (ds / "capture.lp").write_text("\n".join(lines) + "\n")
+
+
+def zero_count_lp(ds):
+    as_rti(ds, ["0"])
+    return 1, r"lists no lights", "ds/capture.lp"
+
+
+def lp_names_a_missing_image(ds):
+    as_rti(ds, ["3", "001.png 0 0 1", "C:\\shots\\IMG_9.png 0.6 0 0.8", "003.png 0 0.6 0.8"])
+    return 1, r"names C:\\shots\\IMG_9\.png, which is in neither", "ds/capture.lp"
+
+
+def two_lp_files(ds):
+    as_rti(ds, ["1", "001.png 0 0 1"])
+    (ds / "other.lp").write_text("1\n001.png 0 0 1\n")
+    return 1, r"holds several \.lp files", "ds"
+
+
 def missing_image(ds):
     (ds / "002.png").unlink()
     return 1, r"no such file", "ds/002.png"
@@ -205,6 +228,7 @@ DATASET_CASES = [
     short_light_file, nan_light, huge_intensity, zero_direction, garbage_light_file,
     coplanar_lights, black_mask,
     fifo_light_file, folder_as_light_file, empty_filenames, missing_filenames, missing_image,
+    zero_count_lp, lp_names_a_missing_image, two_lp_files,
     corrupt_png, forged_png_header, image_of_another_size, small_mask, truncated_ground_truth,
     zero_ground_truth, bad_material, overflowing_material, encoding_not_a_string,
     one_image_unknown_albedo,

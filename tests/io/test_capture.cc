@@ -64,6 +64,11 @@ TEST(LightFiles, EveryFormatGivesTheSameDirections) {
       "0.8\n",
       "rig.lp", 0, nullptr);
   EXPECT_EQ(c.format, "RTI .lp");
+  // Names that start like numbers are still names.
+  EXPECT_EQ(
+      ParseLightFile("3\n001.png 0 0 1\n002.png 0.6 0 0.8\n003.png 0 0.6 0.8\n", "d.lp", 0, nullptr)
+          .image_names[1],
+      "002.png");
   EXPECT_EQ(c.image_names, (std::vector<std::string>{"C:\\capture\\jpeg-exports\\IMG 01.jpg",
                                                      "IMG 02.jpg", "IMG_03.jpg"}));
   // AliceVision's frame: y down, z away from the camera.
@@ -86,6 +91,8 @@ TEST(LightFiles, CountsThatDisagreeAreNamed) {
       "lights.txt:1: says 4 lights on its first line but lists 3");
   EXPECT_EQ(ErrorOf([] { ParseLightFile("0 0 1\n0.6 0 0.8\n0 0.6 0.8\n", "l.txt", 4, nullptr); }),
             "l.txt: has 3 lights for 4 images");
+  EXPECT_EQ(ErrorOf([] { ParseLightFile("0\n", "rig.lp", 0, nullptr); }),
+            "rig.lp: lists no lights");
   EXPECT_EQ(
       ErrorOf([] { ParseLightFile("2\nIMG_01.jpg 0 0\nb.jpg 1 0 0\n", "rig.lp", 0, nullptr); }),
       "rig.lp:2: expected 'filename lx ly lz', got 'IMG_01.jpg 0 0'");
