@@ -47,6 +47,14 @@ std::vector<std::string> FolderFiles(const fs::path& dir) {
   return names;
 }
 
+// The folder itself, absolute and without a trailing separator: "uw/cat/" and "." have a name
+// and a parent like any other folder.
+fs::path Absolute(const fs::path& dir) {
+  fs::path path = fs::absolute(dir).lexically_normal();
+  if (!path.has_filename() && path.has_parent_path()) path = path.parent_path();
+  return path;
+}
+
 std::string Stem(const std::string& name) {
   const std::size_t dot = name.rfind('.');
   return dot == std::string::npos ? name : name.substr(0, dot);
@@ -118,7 +126,7 @@ fs::path FindLightFile(const fs::path& dir, const std::vector<std::string>& file
                   nested[1].string() + "); name the light file with --lights");
   }
   if (nested.size() == 1) return nested[0];
-  const fs::path parent = fs::absolute(dir).lexically_normal().parent_path();
+  const fs::path parent = Absolute(dir).parent_path();
   for (const char* name : {"lights.txt", "light_directions.txt"})
     if (Exists(parent / name)) return (dir / ".." / name).lexically_normal();
   std::vector<std::string> parent_files;
@@ -225,7 +233,8 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
   } else {
     if (light_file.empty()) light_file = FindLightFile(dir, files);
     fs::path list;
-    for (const std::string& name : {dir.filename().string() + ".txt", std::string("images.txt")})
+    for (const std::string& name :
+         {Absolute(dir).filename().string() + ".txt", std::string("images.txt")})
       if (list.empty() && ListsImages(dir / name)) list = dir / name;
     if (Lower(light_file.extension().string()) == ".lp") {
       c.layout = "RTI .lp";

@@ -115,6 +115,8 @@ TEST_F(Capture, UwLayoutRunsAsItIs) {
   EXPECT_EQ(c.names[2], "obj.2.tga");  // not obj.10.tga, where ls puts it
   EXPECT_EQ(c.names[11], "obj.11.tga");
   EXPECT_EQ(fs::path(c.lights_path), (dir_ / ".." / "lights.txt").lexically_normal());
+  // A trailing separator names the same folder, with the same parent.
+  EXPECT_EQ(FindCapture(dir_.string() + "/", {}).lights_path, c.lights_path);
   EXPECT_EQ(c.lights_format, "count + directions");
   EXPECT_EQ(fs::path(c.mask_path).filename(), "obj.mask.tga");
   EXPECT_EQ(c.light_intensities[5], Vec3d::Ones());
