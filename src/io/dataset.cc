@@ -287,7 +287,18 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
       }
     }
   }
-  auto cut = [&](const Mask& m) { return p.crop.width > 0 ? CropMask(m, p.crop) : m; };
+  // Every cut is checked against what it cuts: without the first image (ground truth only) the
+  // crop was not checked above.
+  auto check_crop = [&](int width, int height, const std::string& path) {
+    if (std::string m = CheckRect(p.crop, width, height); !m.empty()) {
+      throw std::invalid_argument(path + ": " + m);
+    }
+  };
+  auto cut = [&](const Mask& m) {
+    if (p.crop.width == 0) return m;
+    check_crop(m.width, m.height, d.files.mask_path);
+    return CropMask(m, p.crop);
+  };
   int width = 0, height = 0;
   if (have_first) {
     TransformedSize(d.file_width, d.file_height, p.crop.width > 0 ? &p.crop : nullptr,
@@ -334,7 +345,10 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
                         SizeText(d.file_width, d.file_height));
       }
       CheckNormalMap(d.normal_gt, truth);
-      if (p.crop.width > 0) d.normal_gt = CropImage(d.normal_gt, p.crop);
+      if (p.crop.width > 0) {
+        check_crop(d.normal_gt.width, d.normal_gt.height, truth);
+        d.normal_gt = CropImage(d.normal_gt, p.crop);
+      }
       d.normal_gt = DownscaleNormals(d.normal_gt, capture.downscale);
     }
   }
