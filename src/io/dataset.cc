@@ -429,6 +429,7 @@ std::string DescribeImageCounts(const Dataset& d) {
                   black_images, d.image_counts.size(), d.filenames[worst_black].c_str(),
                   100 * black_fraction);
     text += (text.empty() ? "" : "; ") + std::string(line);
+    if (d.files.mask_path.empty()) text += " (there is no mask: the background counts; --mask)";
   }
   return text;
 }
