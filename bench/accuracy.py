@@ -1,0 +1,65 @@
+#!/usr/bin/python3
+"""Accuracy report: `iphong normals` on every object with ground truth in the real data
+(../shared/data, or $IPHONG_DATA_DIR), with --model lambert and with the default, as a Markdown
+table of mean and median angular error (degrees) and wall time per run.
+
+Usage: /usr/bin/python3 bench/accuracy.py [--iphong build/iphong] [--threads N] [-- extra flags]
+Extra flags after `--` go to the default run only (to compare a change against lambert)."""
+import argparse
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+DATA = pathlib.Path(os.environ.get("IPHONG_DATA_DIR", ROOT.parent / "shared" / "data"))
+
+
+def objects():
+    for group in ["diligent", "diligent-crop8"]:
+        for folder in sorted((DATA / group).glob("*")):
+            if (folder / "Normal_gt.mat").is_file():
+                yield f"{folder.name} ({'16-bit' if group == 'diligent' else '8-bit crop'})", folder
+
+
+def run(iphong, folder, flags):
+    with tempfile.TemporaryDirectory() as tmp:
+        start = time.monotonic()
+        result = subprocess.run([iphong, "normals", str(folder), "-o", str(pathlib.Path(tmp) / "out"),
+                                 "--json", *flags], capture_output=True, text=True)
+        seconds = time.monotonic() - start
+    if result.returncode != 0:
+        sys.exit(f"accuracy.py: {folder}: {result.stderr.strip()}")
+    metrics = json.loads(result.stdout)
+    return metrics["mean_angular_error_deg"], metrics["median_angular_error_deg"], seconds
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--iphong", default=str(ROOT / "build" / "iphong"))
+    parser.add_argument("--threads", default="0")
+    parser.add_argument("extra", nargs="*", help="flags for the default run (after --)")
+    args = parser.parse_args()
+    found = list(objects())
+    if not found:
+        sys.exit(f"accuracy.py: no object with Normal_gt.mat under {DATA}")
+    common = ["--threads", args.threads]
+    print("| object | lambert mean (median) | default mean (median) | lambert s | default s |")
+    print("|---|---|---|---|---|")
+    totals = [0.0, 0.0]
+    for name, folder in found:
+        lm, lmed, ls = run(args.iphong, folder, common + ["--model", "lambert"])
+        dm, dmed, ds = run(args.iphong, folder, common + args.extra)
+        totals[0] += lm
+        totals[1] += dm
+        print(f"| {name} | {lm:.2f} ({lmed:.2f}) | {dm:.2f} ({dmed:.2f}) | {ls:.1f} | {ds:.1f} |",
+              flush=True)
+    n = len(found)
+    print(f"| mean of {n} | {totals[0] / n:.2f} | {totals[1] / n:.2f} | | |")
+
+
+if __name__ == "__main__":
+    main()
