@@ -13,11 +13,8 @@ from ._core import (  # noqa: F401
     MaterialPreset,
     PointLight,
     __version__,
-    height_to_mesh,
-    integrate,
     material,
     material_presets,
-    normals_from_height,
 )
 
 import functools as _functools
@@ -47,6 +44,10 @@ def _short_type_errors(function):
             raise TypeError(f"{lines[0]} expected {signature[3:]}; got ({passed})") from None
     return wrapper
 
+
+integrate = _short_type_errors(_core.integrate)
+height_to_mesh = _short_type_errors(_core.height_to_mesh)
+normals_from_height = _short_type_errors(_core.normals_from_height)
 
 _MATERIAL_KEYS = ("ka", "kd", "ks", "shininess")
 
@@ -206,6 +207,7 @@ def save_dataset(directory, images, light_directions, light_intensities=None, ma
                         overwrite)
 
 
+@_short_type_errors
 def render(scene, per_light=False, max_memory_gb=None):
     """Render a scene (a dict in the scene-file format, or the path of a scene JSON file).
 
@@ -234,6 +236,7 @@ def _path(value, what):
     return _os.fsdecode(value)
 
 
+@_short_type_errors
 def load_dataset(directory, max_memory_gb=None, *, lights=None, intensities=None, mask=None,
                  encoding="auto", crop=None, downscale=1):
     """Read a capture folder into numpy arrays; see _core.load_dataset."""

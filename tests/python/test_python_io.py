@@ -74,6 +74,9 @@ def test_a_wrong_argument_type_is_one_short_line(sphere):
     text = str(error.value)
     assert "\n" not in text and len(text) < 700 and "[[" not in text
     assert "discard_dark" in text and "got (" in text
+    with pytest.raises(TypeError) as error:
+        iphong.integrate(sphere["normals"], sphere["mask"], min_cos="small")
+    assert "\n" not in str(error.value) and "[[" not in str(error.value)
 
 
 def test_save_dataset_is_what_load_dataset_and_the_cli_read(sphere, tmp_path):
