@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include "error_of.h"
 #include "io/capture.h"
@@ -165,8 +166,23 @@ TEST_F(Capture, EncodingIsWhatTheFileStatesElseLinear) {
   Image(dir_ / "plain.png", 0.5f);
   const StoredEncoding plain = ReadStoredEncoding((dir_ / "plain.png").string());
   EXPECT_EQ(plain.bits, 8);
-  // OpenImageIO calls every PNG sRGB; iphong's linear files carry gAMA 1, others nothing.
-  EXPECT_TRUE(!plain.stated || plain.encoding == Encoding::kLinear) << plain.statement;
+  // iphong's linear PNGs carry gAMA 1.
+  EXPECT_TRUE(plain.stated);
+  EXPECT_EQ(plain.encoding, Encoding::kLinear);
+  EXPECT_EQ(plain.statement, "gAMA 1");
+  // The same file without its gAMA chunk (4 length + 4 type + 4 data + 4 CRC bytes), as
+  // DiLiGenT's PNGs are: OpenImageIO still calls it sRGB, the file states nothing.
+  {
+    std::ifstream in(dir_ / "plain.png", std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    const std::size_t at = bytes.find("gAMA");
+    ASSERT_NE(at, std::string::npos);
+    bytes.erase(at - 4, 16);
+    std::ofstream(dir_ / "bare.png", std::ios::binary) << bytes;
+  }
+  const StoredEncoding bare = ReadStoredEncoding((dir_ / "bare.png").string());
+  EXPECT_FALSE(bare.stated) << bare.statement;
+  EXPECT_EQ(ReadImage((dir_ / "bare.png").string()).width, 4);
 
   WriteImage((dir_ / "srgb.png").string(), ImageF(4, 3, 3, 0.5f), {8, Encoding::kSrgb});
   const StoredEncoding srgb = ReadStoredEncoding((dir_ / "srgb.png").string());
