@@ -111,14 +111,17 @@ fs::path FindLightFile(const fs::path& dir, const std::vector<std::string>& file
     if (Exists(dir / name)) return dir / name;
   if (std::string lp = OnlyWithExtension(files, ".lp", dir); !lp.empty()) return dir / lp;
   // RTIBuilder keeps its .lp in a subfolder (assembly-files/) beside the images.
+  // A subfolder that cannot be read (or is not the user's business) is passed over, not an error.
   std::vector<fs::path> nested;
   std::error_code list_error;
   for (fs::directory_iterator it(dir, list_error), end; !list_error && it != end;
        it.increment(list_error)) {
     std::error_code status_error;
     if (!it->is_directory(status_error) || it->path().filename().string()[0] == '.') continue;
-    for (const std::string& name : FolderFiles(it->path())) {
-      if (Lower(fs::path(name).extension().string()) == ".lp") nested.push_back(it->path() / name);
+    std::error_code sub_error;
+    for (fs::directory_iterator f(it->path(), sub_error), last; !sub_error && f != last;
+         f.increment(sub_error)) {
+      if (Lower(f->path().extension().string()) == ".lp") nested.push_back(f->path());
     }
   }
   if (nested.size() > 1) {
@@ -222,7 +225,6 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
   const std::vector<std::string> files = FolderFiles(dir);
 
   // The images, and the lights when the list gives them.
-  std::vector<std::string> lp_names;
   fs::path light_file = options.lights.empty() ? fs::path() : fs::path(options.lights);
   if (Exists(dir / "filenames.txt")) {
     c.layout = "DiLiGenT";
@@ -244,8 +246,14 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
       c.order = list.filename().string();
     } else {
       c.layout = "folder";
+      // A mask named with --mask may sit among the images under any name.
+      auto named_mask = [&](const std::string& name) {
+        std::error_code e;
+        return !options.mask.empty() && fs::equivalent(dir / name, options.mask, e);
+      };
       for (const std::string& name : files)
-        if (HasImageExtension(name) && !IsCompanionImage(name)) c.names.push_back(name);
+        if (HasImageExtension(name) && !IsCompanionImage(name) && !named_mask(name))
+          c.names.push_back(name);
       c.order = "natural order";
       if (c.names.empty()) Fail(dir, "holds no image files (and no filenames.txt)");
     }

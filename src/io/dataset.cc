@@ -241,7 +241,8 @@ struct Prepared {
   PixelRect crop;  // width 0 = none
   Mask file_mask;  // the mask at the files' resolution, cropped: where pixels are counted
   bool srgb = false;
-  bool integer_files = true;  // saturation exists only for integer code values
+  bool integer_files = true;       // saturation exists only for integer code values
+  std::size_t counted_pixels = 0;  // file_mask.count(): every image's counts are out of it
 };
 
 Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options) {
@@ -268,10 +269,9 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
   const std::string& first = d.files.paths[0];
   const bool have_first = options.load_images || fs::exists(first, error);
   if (have_first) {
-    const StoredEncoding stored = ReadStoredEncoding(first);
-    const ImageHeader header = ReadImageHeader(first);
-    d.file_width = header.width;
-    d.file_height = header.height;
+    const StoredEncoding stored = ReadStoredEncoding(first);  // its header too: one open
+    d.file_width = stored.header.width;
+    d.file_height = stored.header.height;
     d.encoding = ChooseEncoding(d.files, options.capture, stored);
     p.integer_files = !stored.is_float;
   } else {
@@ -352,6 +352,7 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
       d.normal_gt = DownscaleNormals(d.normal_gt, capture.downscale);
     }
   }
+  p.counted_pixels = p.file_mask.count();
   d.image_counts.assign(d.filenames.size(), {});
   return p;
 }
@@ -364,14 +365,13 @@ ImageF ReadWorkingImage(const Prepared& p, std::size_t j, const std::string& ref
   ImageF image = ReadDatasetImage(path, d.file_width, d.file_height, reference, options.memory);
   if (p.crop.width > 0) image = CropImage(image, p.crop);
   // Saturation is a property of the stored code values: counted before any averaging.
-  const bool integer = p.integer_files;
   for (std::size_t q = 0; q < image.pixel_count(); ++q) {
     if (!p.file_mask.inside[q]) continue;
     const float* v = image.pixels.data() + 3 * q;
     if (v[0] == 0 && v[1] == 0 && v[2] == 0) ++counts->black;
-    if (integer && (v[0] >= 1 || v[1] >= 1 || v[2] >= 1)) ++counts->saturated;
+    if (p.integer_files && (v[0] >= 1 || v[1] >= 1 || v[2] >= 1)) ++counts->saturated;
   }
-  counts->pixels = p.file_mask.count();
+  counts->pixels = p.counted_pixels;
   if (p.srgb)
     for (float& v : image.pixels) v = SrgbToLinear(v);
   return DownscaleImage(image, options.capture.downscale);

@@ -188,10 +188,9 @@ void ReadPngStatement(const std::string& path, StoredEncoding* e) {
 }  // namespace
 
 StoredEncoding ReadStoredEncoding(const std::string& path) {
-  ImageHeader header;
-  auto in = OpenChecked(path, &header);
-  const OIIO::ImageSpec& spec = in->spec();
   StoredEncoding e;
+  auto in = OpenChecked(path, &e.header);
+  const OIIO::ImageSpec& spec = in->spec();
   e.format = in->format_name();
   e.is_float = spec.format.is_floating_point();
   e.bits = spec.get_int_attribute("oiio:BitsPerSample", static_cast<int>(spec.format.size()) * 8);

@@ -51,6 +51,7 @@ ImageF ReadImage(const std::string& path, const MemoryLimit& memory = {},
 // chunk, any file with an Exif ColorSpace tag of sRGB. OpenImageIO reports "sRGB" for every PNG,
 // chunk or not, so PNG chunks are read here from the file itself.
 struct StoredEncoding {
+  ImageHeader header;     // the size the file declares (ReadImageHeader's checks)
   int bits = 8;           // per channel as stored
   bool is_float = false;  // half or float samples
   std::string format;     // OpenImageIO's name: "png", "jpeg", "targa", "openexr", ...

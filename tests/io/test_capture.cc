@@ -137,6 +137,19 @@ TEST_F(Capture, UwLayoutRunsAsItIs) {
                 "in light order");
 }
 
+TEST_F(Capture, AMaskNamedOnTheCommandLineIsNotALightImage) {
+  Write(dir_ / "lights.txt", "0 0 1\n0.6 0 0.8\n0 0.6 0.8\n");
+  for (int i = 1; i <= 3; ++i) Image(dir_ / ("shot" + std::to_string(i) + ".png"), 0.2f);
+  Image(dir_ / "matte.png", 1);  // a name no rule knows as a mask's
+  EXPECT_NE(ErrorOf([&] { FindCapture(dir_.string(), {}); }).find("holds 4 images"),
+            std::string::npos);
+  CaptureOptions options;
+  options.mask = (dir_ / "matte.png").string();
+  const CaptureFiles c = FindCapture(dir_.string(), options);
+  EXPECT_EQ(c.names, (std::vector<std::string>{"shot1.png", "shot2.png", "shot3.png"}));
+  EXPECT_EQ(c.mask_path, options.mask);
+}
+
 TEST_F(Capture, RtiLpNamesTheImagesWhereverRtiBuilderWroteThem) {
   fs::create_directories(dir_ / "assembly-files");
   std::string lp = "3\n";
