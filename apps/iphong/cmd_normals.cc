@@ -76,7 +76,9 @@ void RunNormals(const NormalsCommandOptions& o) {
   io::OutputFolderOptions folder;
   folder.command = "normals";
   folder.overwrite = o.common.overwrite;
-  folder.inputs = {o.dataset};
+  // Every file the run reads: the folder, and what the capture flags name outside it.
+  folder.inputs = {o.dataset, o.capture.options.lights, o.capture.options.intensities,
+                   o.capture.options.mask};
   io::OutputFolder out(o.output_dir, folder);
   io::DatasetLoadOptions load;
   load.capture = o.capture.resolved();
@@ -347,7 +349,9 @@ void RunEval(const EvalOptions& o) {
 
 void AddNormalsCommand(CLI::App& app) {
   auto o = std::make_shared<NormalsCommandOptions>();
-  auto* cmd = app.add_subcommand("normals", "Recover normals and albedo from a capture folder (DiLiGenT, UW, RTI .lp, images + lights)");
+  auto* cmd = app.add_subcommand(
+      "normals",
+      "Recover normals and albedo from a capture folder (DiLiGenT, UW, RTI .lp, images + lights)");
   cmd->add_option("dataset", o->dataset,
                   "Capture folder: DiLiGenT, UW, RTI .lp, or a folder of images with a light file")
       ->required();

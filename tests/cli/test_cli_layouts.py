@@ -181,3 +181,14 @@ def test_integrate_takes_diligent_ground_truth_without_flags(tmp_path):
         assert 0 < report["back_facing_pixels"] < 0.02 * report["pixels"]
         assert "face away from the camera: taken as grazing" in stderr
 
+
+
+def test_an_output_folder_may_not_hold_a_file_the_capture_flags_name(tmp_path):
+    normals(UW / "gray", tmp_path / "out")
+    mask = tmp_path / "out" / "my-mask.tga"  # the user keeps the mask in an earlier output
+    mask.write_bytes((UW / "gray" / "gray.mask.tga").read_bytes())
+    before = {p: p.read_bytes() for p in (tmp_path / "out").iterdir() if p.is_file()}
+    code, _, stderr = run("normals", UW / "gray", "-o", tmp_path / "out", "--overwrite",
+                          "--mask", mask)
+    assert code == 4 and "input" in stderr, stderr
+    assert {p: p.read_bytes() for p in (tmp_path / "out").iterdir() if p.is_file()} == before
