@@ -48,6 +48,18 @@ void RequireSize(const ImageF& image, int width, int height, const char* what) {
 
 void BindIo(py::module_& m) {
   m.def(
+      "_srgb_to_linear",
+      [](const py::array_t<float, py::array::c_style | py::array::forcecast>& values) {
+        py::array_t<float> out(
+            std::vector<py::ssize_t>(values.shape(), values.shape() + values.ndim()));
+        const float* in = values.data();
+        float* o = out.mutable_data();
+        for (py::ssize_t i = 0; i < values.size(); ++i) o[i] = io::SrgbToLinear(in[i]);
+        return out;
+      },
+      py::arg("values"));
+
+  m.def(
       "_save_normals",
       [](const std::string& path, const py::object& normals_in, const py::object& mask_in,
          const std::string& convention, bool overwrite) {

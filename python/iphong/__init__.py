@@ -78,10 +78,6 @@ def shade(normal, view=(0.0, 0.0, 1.0), material=None, lights=None, ambient=0.0,
 shade.__doc__ = _core.shade.__doc__
 
 
-def _linearize(values):
-    return _np.where(values <= 0.04045, values / 12.92, ((values + 0.055) / 1.055) ** 2.4)
-
-
 def _image_stack(images, k, encoding):
     """images as (K, H, W, 3) float32 linear, with a message that says what to do otherwise."""
     if encoding not in (None, "linear", "srgb"):
@@ -102,7 +98,7 @@ def _image_stack(images, k, encoding):
         a = a.astype(_np.float32) / top
     a = a.astype(_np.float32, copy=False)
     if encoding == "srgb":
-        a = _linearize(_np.clip(a, 0, 1)).astype(_np.float32)
+        a = _core._srgb_to_linear(a)  # io's curve, the one the command line uses
     shape = tuple(a.shape)
     if a.ndim == 3:  # greyscale: (K, H, W)
         if shape[0] != k and shape[2] == k:
@@ -133,10 +129,11 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
         raise TypeError("light_directions: expected a (K, 3) array, got "
                         f"{type(light_directions).__name__}") from None
     images = _image_stack(images, k, encoding)
-    if material is not None:
-        material = dict(_material_dict(material, extra=("ambient", "model")))
-        if isinstance(material.get("kd"), (list, tuple)) and not any(material["kd"]):
-            del material["kd"]  # an iphong.Material's default kd 0: the albedo is unknown
+    if isinstance(material, Material) and not any(material.kd):
+        # An iphong.Material made without kd has kd 0: the albedo is unknown, not black.
+        material = {k: v for k, v in _material_dict(material).items() if k != "kd"}
+    elif material is not None:
+        material = _material_dict(material, extra=("ambient", "model"))
     return _core.estimate_normals(images, light_directions, light_intensities, mask, model,
                                   material, *args, **kwargs)
 

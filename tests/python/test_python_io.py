@@ -34,6 +34,14 @@ def test_integer_images_are_refused_unless_an_encoding_says_how_to_scale_them(sp
                                       model="lambert")
     np.testing.assert_array_equal(scaled["normals"], by_hand["normals"])
     assert mean_error(scaled, sphere) < 1.0  # 8-bit quantization only
+    # encoding="srgb" undoes the sRGB curve (IEC 61966-2-1: 0.04045 -> 0.0031308, 0.5 -> 0.214041).
+    np.testing.assert_allclose(iphong._core._srgb_to_linear(np.array([0, 0.04045, 0.5, 1.0])),
+                               [0, 0.0031308, 0.214041, 1], atol=2e-6)
+    srgb_codes = np.round(np.clip(sphere["images"], 0, 1) ** (1 / 2.2) * 255).astype(np.uint8)
+    decoded = iphong.estimate_normals(srgb_codes, LIGHTS, mask=sphere["mask"], model="lambert",
+                                      encoding="srgb")
+    # Measured 1.23° (sRGB is close to the gamma 2.2 used here); read as linear: 14.1°.
+    assert mean_error(decoded, sphere) < 2.0
 
 
 def test_shapes_people_pass(sphere):
