@@ -5,7 +5,6 @@
 
 #include "integrate/integrate.h"
 #include "io/dataset.h"
-#include "io/files.h"
 #include "io/image_io.h"
 #include "io/output_folder.h"
 #include "io/surface.h"
@@ -136,9 +135,7 @@ void RunIntegrate(IntegrateCommandOptions& o) {
   const io::SurfaceFiles written =
       io::WriteSurfaceFiles(out, "", result, in.normals, in.mask, io::FrameOf(options), files);
   out.Commit();
-  if (o.common.json) {
-    PrintJson(o.common, io::ReadTextFile((fs::path(o.output_dir) / "integrate.json").string()));
-  }
+  PrintJson(o.common, written.report);
 
   const integrate::IntegrateSummary& s = result.summary;
   if (s.back_facing_pixels > 0) {

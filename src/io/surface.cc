@@ -114,7 +114,8 @@ SurfaceFiles WriteSurfaceFiles(OutputFolder& out, const std::string& prefix,
       {"mesh_triangles", files.triangles},
       {"consistency_mean_deg", files.consistency_mean_deg},
       {"consistency_median_deg", files.consistency_median_deg}};
-  WriteTextFile(file("integrate.json"), report.dump(2) + "\n");
+  files.report = report.dump(2);
+  WriteTextFile(file("integrate.json"), files.report + "\n");
   files.names.push_back("integrate.json");
   return files;
 }

@@ -22,6 +22,7 @@ struct SurfaceFiles {
   std::size_t vertices = 0, triangles = 0;
   // Mean and median angle between the input normals and the height map's own (re-differentiated).
   double consistency_mean_deg = 0, consistency_median_deg = 0;
+  std::string report;  // integrate.json's content
 };
 
 // The mesh of a height map (geometry::MeshFromHeightMap: per-vertex normals from `normals`,

@@ -174,9 +174,10 @@ def test_eval_reads_png_normal_maps_in_both_conventions(tmp_path):
 def test_integrate_takes_diligent_ground_truth_without_flags(tmp_path):
     for source in [CROP_CAT, CROP_CAT / "Normal_gt.png"]:
         out = tmp_path / source.name
-        code, _, stderr = run("integrate", source, "-o", out)
+        code, stdout, stderr = run("integrate", source, "-o", out, "--json")
         assert code == 0, stderr
         report = json.loads((out / "integrate.json").read_text())
+        assert json.loads(stdout) == report
         # A few silhouette normals tip past 90°: clamped to grazing and counted.
         assert 0 < report["back_facing_pixels"] < 0.02 * report["pixels"]
         assert "face away from the camera: taken as grazing" in stderr
