@@ -349,9 +349,14 @@ void WriteSingleOutputFile(const std::string& path, bool overwrite,
                            const std::vector<std::string>& inputs,
                            const std::function<void(const std::string& temp)>& write) {
   const fs::path target = Resolve(path);
+  // As for folders: not an input, and not inside one (an input folder is the user's dataset).
   for (const std::string& input : inputs) {
-    if (!input.empty() && Resolve(input) == target) {
-      Refuse(path + ": is an input; write the output to a file of its own");
+    if (input.empty()) continue;
+    const fs::path in = Resolve(input);
+    if (in == target) Refuse(path + ": is an input; write the output to a file of its own");
+    if (Within(target, in)) {
+      Refuse(path + ": lies inside the input " + input +
+             "; write the output outside it (nothing was changed)");
     }
   }
   std::error_code error;

@@ -98,7 +98,8 @@ std::string WithoutStagingNames(const std::string& message);
 
 // A single output file (`eval --error-map`): `write` writes it, verified, at the temporary path it
 // is given; then it takes `path`'s name. Without `overwrite` an existing `path` is an error and
-// is never replaced; `inputs` may not name `path`. Throws OutputError.
+// is never replaced; `path` may not be one of `inputs` nor lie inside an input folder, even with
+// `overwrite`. Throws OutputError.
 void WriteSingleOutputFile(const std::string& path, bool overwrite,
                            const std::vector<std::string>& inputs,
                            const std::function<void(const std::string& temp)>& write);

@@ -206,6 +206,10 @@ def test_error_map_is_a_new_file_unless_overwrite(capture, tmp_path):
     assert_refused(tmp_path, ["eval", out / "normals.exr", capture, "--error-map",
                               out / "normals.exr", "--overwrite"],
                    4, r"normals\.exr: is an input")
+    # Inside the dataset folder, even with --overwrite: its mask would have been replaced.
+    assert_refused(tmp_path, ["eval", out / "normals.exr", capture, "--error-map",
+                              capture / "mask.png", "--overwrite"],
+                   4, r"mask\.png: lies inside the input")
     code, _, err = run("eval", out / "normals.exr", capture, "--error-map", tmp_path / "new.png")
     assert code == 0, err
     assert (tmp_path / "new.png").stat().st_size > 100
