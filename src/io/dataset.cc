@@ -372,8 +372,7 @@ ImageF ReadWorkingImage(const Prepared& p, std::size_t j, const std::string& ref
     if (p.integer_files && (v[0] >= 1 || v[1] >= 1 || v[2] >= 1)) ++counts->saturated;
   }
   counts->pixels = p.counted_pixels;
-  if (p.srgb)
-    for (float& v : image.pixels) v = SrgbToLinear(v);
+  if (p.srgb) LinearizeSrgb(image);
   return DownscaleImage(image, options.capture.downscale);
 }
 

@@ -75,6 +75,19 @@ float SrgbToLinear(float encoded) {
   return x <= 0.04045f ? x / 12.92f : std::pow((x + 0.055f) / 1.055f, 2.4f);
 }
 
+void LinearizeSrgb(ImageF& image) {
+  static const std::vector<float> table = [] {  // built once, read-only afterwards
+    std::vector<float> t(65536);
+    for (int k = 0; k < 65536; ++k) t[k] = SrgbToLinear(k / 65535.0f);
+    return t;
+  }();
+  for (float& v : image.pixels) {
+    const float code = v * 65535.0f;
+    const int k = static_cast<int>(code + 0.5f);
+    v = (k >= 0 && k <= 65535 && std::abs(code - k) < 1e-3f) ? table[k] : SrgbToLinear(v);
+  }
+}
+
 void WriteImage(const std::string& path, const ImageF& image, const WriteOptions& options) {
   if (image.width <= 0 || image.height <= 0 || image.channels <= 0 ||
       image.pixels.size() != image.pixel_count() * image.channels) {

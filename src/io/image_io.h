@@ -68,4 +68,9 @@ Mask ReadMask(const std::string& path, const MemoryLimit& memory = {});
 float LinearToSrgb(float linear);
 float SrgbToLinear(float encoded);
 
+// SrgbToLinear over a whole image. Values that are 16-bit codes (k/65535, which 8-bit codes k/255
+// also are) go through a table of the 65536 exact results, one lookup instead of a pow each;
+// anything else is computed.
+void LinearizeSrgb(ImageF& image);
+
 }  // namespace iphong::io

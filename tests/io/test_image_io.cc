@@ -92,3 +92,23 @@ TEST_F(ImageIoTest, CorruptAndMissingFilesAreNamedInTheError) {
 
 }  // namespace
 }  // namespace iphong::io
+
+namespace iphong::io {
+namespace {
+
+TEST(Srgb, TheTableGivesTheCurvesValues) {
+  ImageF image(65536 + 256 + 3, 1, 1);
+  for (int k = 0; k < 65536; ++k) image.pixels[k] = k / 65535.0f;      // 16-bit codes
+  for (int k = 0; k < 256; ++k) image.pixels[65536 + k] = k / 255.0f;  // 8-bit codes
+  const float others[3] = {0.123456f, 1.5f, -0.25f};                   // no code at all
+  std::copy(others, others + 3, image.pixels.begin() + 65536 + 256);
+  const ImageF original = image;
+  LinearizeSrgb(image);
+  for (std::size_t i = 0; i < image.pixels.size(); ++i) {
+    ASSERT_NEAR(image.pixels[i], SrgbToLinear(original.pixels[i]), 1e-7f) << i;
+  }
+  EXPECT_NEAR(image.pixels[65536 + 128], 0.2158605f, 1e-6f);  // 128/255, IEC 61966-2-1
+}
+
+}  // namespace
+}  // namespace iphong::io
