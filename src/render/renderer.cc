@@ -311,14 +311,14 @@ namespace {
 
 // "rendering 64x64 with 2x2 supersampling and 12 per-light images with 12 2048x2048 shadow maps"
 std::string DescribeRender(const Scene& scene, const RenderOptions& options, bool per_light) {
-  auto square = [](int n) { return std::to_string(n) + "x" + std::to_string(n); };
   const std::string lights = std::to_string(scene.lighting.lights.size());
   std::string text = "rendering " + SizeText(scene.camera.width, scene.camera.height);
   if (options.supersampling > 1)
-    text += " with " + square(options.supersampling) + " supersampling";
+    text += " with " + SizeText(options.supersampling, options.supersampling) + " supersampling";
   if (per_light) text += " and " + lights + " per-light images";
   if (options.shadows)
-    text += " with " + lights + " " + square(options.shadow_map_size) + " shadow maps";
+    text += " with " + lights + " " + SizeText(options.shadow_map_size, options.shadow_map_size) +
+            " shadow maps";
   return text;
 }
 
