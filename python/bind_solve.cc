@@ -23,9 +23,9 @@ void BindSolve(py::module_& m) {
   m.def(
       "estimate_normals",
       [](const py::object& images_in, const py::object& light_directions,
-         const py::object& light_intensities, const py::object& mask_in, const std::string& model,
+         const py::object& light_intensities, const py::object& mask_in, const py::object& model,
          const py::object& material, double discard_dark, double discard_bright, bool fast,
-         int specular_clusters, bool varying_specular, double specular_prior, int threads) {
+         double shadow_threshold, int threads) {
         FloatArray images = FloatArray::ensure(images_in);
         if (!images || images.ndim() != 4 || images.shape(3) != 3) {
           throw std::invalid_argument("images must have shape (K, H, W, 3)");
@@ -47,14 +47,16 @@ void BindSolve(py::module_& m) {
         const solve::PhotometricData data =
             solve::GatherObservations(pointers, w, h, mask, dirs, intensities);
         solve::NormalOptions options;
-        options.model = reflectance::ParseLobe(model);
+        const bool model_given = !model.is_none();
+        if (model_given) {
+          options.model = reflectance::ParseLobe(ToText(model, "model"));
+          options.choose_model = false;
+        }
         options.discard_dark = discard_dark;
         options.discard_bright = discard_bright;
         options.threads = threads;
         options.color_residuals = !fast;
-        options.specular_clusters = specular_clusters;
-        options.varying_specular = varying_specular;
-        options.specular_prior = specular_prior;
+        options.shadow_threshold = shadow_threshold;
         if (!material.is_none()) {
           if (!py::isinstance<py::dict>(material)) {
             throw py::type_error(
@@ -92,7 +94,7 @@ void BindSolve(py::module_& m) {
           options.ambient_term = ambient.cwiseProduct(coefficients.ka);
           options.ks = coefficients.ks;
           options.shininess = coefficients.shininess;
-          if (d.contains("model") && model == "phong") {
+          if (d.contains("model") && !model_given) {
             options.model = reflectance::ParseLobe(ToText(d["model"], "material['model']"));
           }
           if (d.contains("kd")) options.known_albedo = coefficients.kd;
@@ -112,30 +114,27 @@ void BindSolve(py::module_& m) {
         out["albedo"] = ToArray(result.albedo);
         out["residual"] = ToArray(result.residual);
         if (!result.specular.pixels.empty()) out["specular"] = ToArray(result.specular);
-        out["model"] = reflectance::LobeName(options.model);
+        out["model"] = reflectance::LobeName(result.model);
         out["ks"] = result.ks;
         out["shininess"] = result.shininess;
         out["ambient_term"] = result.ambient_term;
         out["material_estimated"] = result.material_estimated;
         out["specular_identifiable"] = result.specular_identifiable;
         out["specular_note"] = result.specular_note;
-        py::list clusters;
-        for (const solve::SpecularCluster& c : result.clusters) {
-          clusters.append(
-              py::dict(py::arg("albedo") = c.albedo_center, py::arg("pixels") = c.pixels,
-                       py::arg("ks") = c.ks, py::arg("shininess") = c.shininess,
-                       py::arg("ambient_term") = c.ambient_term, py::arg("estimated") = c.estimated,
-                       py::arg("identifiable") = c.identifiable, py::arg("note") = c.note));
+        py::list scores;
+        for (const solve::ModelCandidate& c : result.model_choice.scored) {
+          scores.append(py::dict(py::arg("model") = reflectance::LobeName(c.lobe),
+                                 py::arg("shininess") = c.shininess,
+                                 py::arg("heldout_cost") = c.heldout_cost));
         }
-        out["clusters"] = clusters;
-        if (!result.cluster_map.pixels.empty()) out["cluster_map"] = ToArray(result.cluster_map);
+        out["model_scores"] = scores;
         if (!result.ambiguity_deg.pixels.empty()) {
           out["ambiguity_deg"] = ToArray(result.ambiguity_deg);
         }
         out["summary"] =
             py::dict(py::arg("message") = result.summary.message,
                      py::arg("init_seconds") = result.summary.init_seconds,
-                     py::arg("specular_seconds") = result.summary.specular_seconds,
+                     py::arg("model_seconds") = result.summary.model_seconds,
                      py::arg("solve_seconds") = result.summary.solve_seconds,
                      py::arg("iterations") = result.summary.iterations,
                      py::arg("pixels") = result.summary.pixels,
@@ -144,19 +143,18 @@ void BindSolve(py::module_& m) {
         return out;
       },
       py::arg("images"), py::arg("light_directions"), py::arg("light_intensities") = py::none(),
-      py::arg("mask") = py::none(), py::arg("model") = "phong", py::arg("material") = py::none(),
+      py::arg("mask") = py::none(), py::arg("model") = py::none(), py::arg("material") = py::none(),
       py::arg("discard_dark") = 0.3, py::arg("discard_bright") = 0.1, py::arg("fast") = false,
-      py::arg("specular_clusters") = 1, py::arg("varying_specular") = true,
-      py::arg("specular_prior") = solve::NormalOptions{}.specular_prior, py::arg("threads") = 0,
+      py::arg("shadow_threshold") = solve::NormalOptions{}.shadow_threshold, py::arg("threads") = 0,
       R"doc(Recover per-pixel normals and albedo (see `iphong normals`).
 
 images (K, H, W, 3) linear float; light_directions (K, 3) from the surface toward the light;
-light_intensities (K, 3) or None (ones); mask (H, W) bool or None; model "phong",
-"blinn-phong" or "lambert" (Woodham); material: dict with ka, ks, shininess, ambient (and model)
-when the coefficients are known, else they are estimated (per albedo cluster with
-specular_clusters > 1: the result's clusters list and cluster_map (H, W)); varying_specular
-lets an estimated ks vary in strength from pixel to pixel (specular_prior: its pull toward the
-shared strength, in observations of the lobe's peak).
+light_intensities (K, 3) or None (ones); mask (H, W) bool or None; model None (chosen by
+held-out prediction among Lambert, Phong and Blinn-Phong: model_scores lists every candidate),
+"phong" or "blinn-phong" (that lobe, its shininess chosen) or "lambert" (Woodham); material: dict
+with ka, ks, shininess, ambient (and model) when the coefficients are known, else ks is
+estimated per pixel; shadow_threshold: observations darker than the model by more than this
+fraction of the pixel's brightness count as shadowed.
 Returns normals (H, W, 3), albedo (H, W, 3), specular (H, W, 3: each pixel's ks; not for
 lambert), residual (H, W; -1 where no normal was found),
 the specular coefficients used or estimated, and a summary. With 1 or 2 images (material with

@@ -28,13 +28,10 @@ struct NormalsCommandOptions {
   bool ignore_material = false;
   double discard_dark = 0.3, discard_bright = 0.1;
   std::string convention = "opengl";
-  double robust_scale = solve::NormalOptions{}.robust_scale;
+  double shadow_threshold = solve::NormalOptions{}.shadow_threshold;
   int irls_rounds = solve::NormalOptions{}.irls_rounds;
   bool fast = false;
   bool integrate = false;
-  int specular_clusters = 1;
-  bool uniform_specular = false;
-  double specular_prior = solve::NormalOptions{}.specular_prior;
   CaptureFlags capture;
   CommonOptions common;
 };
@@ -98,12 +95,9 @@ void RunNormals(const NormalsCommandOptions& o) {
   options.discard_dark = o.discard_dark;
   options.discard_bright = o.discard_bright;
   options.threads = o.common.threads;
-  options.robust_scale = o.robust_scale;
+  options.shadow_threshold = o.shadow_threshold;
   options.irls_rounds = o.irls_rounds;
   options.color_residuals = !o.fast;
-  options.specular_clusters = o.specular_clusters;
-  options.varying_specular = !o.uniform_specular;
-  options.specular_prior = o.specular_prior;
   if (dataset.material && !o.ignore_material) {
     options.model = dataset.material->model;
     options.material_known = true;
@@ -112,7 +106,10 @@ void RunNormals(const NormalsCommandOptions& o) {
     options.shininess = dataset.material->material.shininess;
     if (dataset.material->kd_known) options.known_albedo = dataset.material->material.kd;
   }
-  if (o.model) options.model = reflectance::ParseLobe(*o.model);
+  if (o.model) {
+    options.model = reflectance::ParseLobe(*o.model);
+    options.choose_model = false;  // the user's lobe: only its shininess is chosen
+  }
   auto fit_progress = std::make_shared<Progress>("fit", o.common.talk());
   options.progress = [fit_progress](double fraction) { fit_progress->Update(fraction); };
 
@@ -136,13 +133,26 @@ void RunNormals(const NormalsCommandOptions& o) {
   metrics["input"] = InputJson(dataset);
   metrics["pixels"] = data.pixel_count();
   metrics["images"] = data.images;
-  metrics["model"] = reflectance::LobeName(options.model);
+  metrics["model"] = reflectance::LobeName(result.model);
   metrics["load_seconds"] = load_seconds;
   metrics["init_seconds"] = result.summary.init_seconds;
-  metrics["specular_seconds"] = result.summary.specular_seconds;
+  metrics["model_seconds"] = result.summary.model_seconds;
   metrics["solve_seconds"] = result.summary.solve_seconds;
   metrics["iterations"] = result.summary.iterations;
-  metrics["specular_clusters"] = result.clusters.size();
+  if (!result.model_choice.scored.empty()) {
+    nlohmann::json scores = nlohmann::json::array();
+    for (const solve::ModelCandidate& m : result.model_choice.scored) {
+      scores.push_back({{"model", reflectance::LobeName(m.lobe)},
+                        {"shininess", m.shininess},
+                        {"heldout_cost", m.heldout_cost},
+                        {"heldout_error", m.heldout_error},
+                        {"fold_angle_deg", m.fold_angle_deg}});
+    }
+    metrics["model_choice"] = {{"chosen", reflectance::LobeName(result.model)},
+                               {"shininess", result.shininess},
+                               {"pixels", result.model_choice.pixels},
+                               {"scores", scores}};
+  }
   if (!ambiguity.pixels.empty()) {
     metrics["solver"] = "global (one or two images): data + smoothness + integrability + boundary";
   }
@@ -151,7 +161,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   metrics["material"] = options.material_known                         ? "known (material.json)"
                         : options.model == reflectance::Lobe::kLambert ? "lambertian"
                         : result.material_estimated                    ? "estimated"
-                                                                       : "not identifiable";
+                                                                       : "lambertian (chosen)";
   if (!result.specular_note.empty()) metrics["specular_note"] = result.specular_note;
   std::optional<solve::AngularErrorMetrics> errors;
   if (!dataset.normal_gt.pixels.empty()) {
@@ -176,29 +186,14 @@ void RunNormals(const NormalsCommandOptions& o) {
   const bool specular_map = result.material_estimated && !result.specular.pixels.empty();
   if (specular_map) io::WriteImage(out.file("specular.exr"), result.specular);
   if (!ambiguity.pixels.empty()) io::WriteImage(out.file("ambiguity.exr"), ambiguity);
-  if (!result.cluster_map.pixels.empty())
-    io::WriteImage(out.file("clusters.exr"), result.cluster_map);
   if (result.material_estimated) {
     nlohmann::json material = {
-        {"model", reflectance::LobeName(options.model)},
+        {"model", reflectance::LobeName(result.model)},
         {"ks", {result.ks[0], result.ks[1], result.ks[2]}},
         {"shininess", result.shininess},
         {"ambient", {1, 1, 1}},
         {"ka", {result.ambient_term[0], result.ambient_term[1], result.ambient_term[2]}},
         {"comment", "estimated by iphong normals: " + result.specular_note}};
-    if (result.clusters.size() > 1) {
-      // Per albedo cluster; the top-level coefficients are the largest cluster's.
-      material["clusters"] = nlohmann::json::array();
-      for (const solve::SpecularCluster& c : result.clusters) {
-        material["clusters"].push_back(
-            {{"albedo", {c.albedo_center[0], c.albedo_center[1], c.albedo_center[2]}},
-             {"pixels", c.pixels},
-             {"ks", {c.ks[0], c.ks[1], c.ks[2]}},
-             {"shininess", c.shininess},
-             {"ka", {c.ambient_term[0], c.ambient_term[1], c.ambient_term[2]}},
-             {"identifiable", c.identifiable}});
-      }
-    }
     io::WriteTextFile(out.file("material.json"), material.dump(2) + "\n");
   }
   if (errors)
@@ -236,10 +231,10 @@ void RunNormals(const NormalsCommandOptions& o) {
 
   if (ambiguity.pixels.empty()) {
     Say(o.common,
-        "%zu pixels x %d images, model %s: load %.2f s, Woodham %.2f s, specular %.2f s, "
-        "per-pixel fit %.2f s\n",
-        data.pixel_count(), data.images, reflectance::LobeName(options.model).c_str(), load_seconds,
-        result.summary.init_seconds, result.summary.specular_seconds, result.summary.solve_seconds);
+        "%zu pixels x %d images, model %s: load %.2f s, Woodham %.2f s, model choice %.2f s, "
+        "search and fit %.2f s\n",
+        data.pixel_count(), data.images, reflectance::LobeName(result.model).c_str(), load_seconds,
+        result.summary.init_seconds, result.summary.model_seconds, result.summary.solve_seconds);
   } else {
     Say(o.common,
         "%zu pixels x %d images, model %s: load %.2f s, global solve with priors %.2f s "
@@ -247,21 +242,10 @@ void RunNormals(const NormalsCommandOptions& o) {
         data.pixel_count(), data.images, reflectance::LobeName(options.model).c_str(), load_seconds,
         result.summary.solve_seconds, result.summary.iterations);
   }
-  if (result.clusters.size() > 1) {
-    Say(o.common, "Estimated per albedo cluster:\n");
-    for (std::size_t i = 0; i < result.clusters.size(); ++i) {
-      const solve::SpecularCluster& c = result.clusters[i];
-      Say(o.common,
-          "  #%zu: %zu pixels, albedo [%.3f %.3f %.3f]: ks = [%.3f %.3f %.3f], shininess = "
-          "%.1f (%s)\n",
-          i, c.pixels, c.albedo_center[0], c.albedo_center[1], c.albedo_center[2], c.ks[0], c.ks[1],
-          c.ks[2], c.shininess, c.note.c_str());
-    }
-  } else if (result.material_estimated) {
-    Say(o.common,
-        "Estimated ks = [%.3f %.3f %.3f], shininess = %.1f, ambient = [%.3f %.3f %.3f] (%s)\n",
-        result.ks[0], result.ks[1], result.ks[2], result.shininess, result.ambient_term[0],
-        result.ambient_term[1], result.ambient_term[2], result.specular_note.c_str());
+  if (result.material_estimated) {
+    Say(o.common, "Model %s, shininess %.1f; ks median [%.3f %.3f %.3f] (%s)\n",
+        reflectance::LobeName(result.model).c_str(), result.shininess, result.ks[0], result.ks[1],
+        result.ks[2], result.specular_note.c_str());
   } else if (!result.specular_note.empty()) {
     Say(o.common, "%s\n", result.specular_note.c_str());
   }
@@ -286,11 +270,10 @@ void RunNormals(const NormalsCommandOptions& o) {
         surface->consistency_mean_deg, surface->triangles);
   }
   Say(o.common,
-      "Wrote %s: normals.exr/.png, albedo.exr/.png, residual.exr/.png, metrics.json%s%s%s%s%s%s\n",
+      "Wrote %s: normals.exr/.png, albedo.exr/.png, residual.exr/.png, metrics.json%s%s%s%s%s\n",
       o.output_dir.c_str(), result.material_estimated ? ", material.json" : "",
       specular_map ? ", specular.exr" : "", errors ? ", error.png" : "",
       ambiguity.pixels.empty() ? "" : ", ambiguity.exr",
-      result.cluster_map.pixels.empty() ? "" : ", clusters.exr",
       surface ? ", height.exr, mesh.ply, height.png, integrate.json" : "");
 }
 
@@ -358,10 +341,12 @@ void AddNormalsCommand(CLI::App& app) {
   cmd->add_option("-o,--output", o->output_dir,
                   "Output folder: new or empty, or an earlier normals output with --overwrite")
       ->required();
-  cmd->add_option("--model", o->model, "Reflectance model (default: material.json's, else phong)")
+  cmd->add_option(
+         "--model", o->model,
+         "Reflectance model (default: material.json's, else chosen by held-out prediction)")
       ->check(CLI::IsMember({"phong", "blinn-phong", "lambert"}));
   cmd->add_flag("--ignore-material", o->ignore_material,
-                "Ignore material.json and estimate the specular coefficients");
+                "Ignore material.json: choose the model and estimate ks per pixel");
   cmd->add_option("--discard-dark", o->discard_dark,
                   "Fraction of each pixel's darkest observations Woodham drops")
       ->check(CLI::Range(0.0, 0.9))
@@ -373,29 +358,16 @@ void AddNormalsCommand(CLI::App& app) {
   cmd->add_option("--normal-map-convention", o->convention, "normals.png green axis")
       ->check(CLI::IsMember({"opengl", "directx"}))
       ->capture_default_str();
-  cmd->add_option("--robust-scale", o->robust_scale,
-                  "Cauchy scale relative to each pixel's mean value (smaller = more outliers)")
+  cmd->add_option("--shadow-threshold", o->shadow_threshold,
+                  "Observations darker than the model by more than this fraction of the pixel's "
+                  "brightness count as shadowed (censored)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->add_option("--irls-rounds", o->irls_rounds, "Reweighting rounds of the robust fit")
+  cmd->add_option("--irls-rounds", o->irls_rounds, "Censoring rounds of the local fit")
       ->check(CLI::Range(1, 20))
       ->capture_default_str();
   cmd->add_flag("--fast", o->fast,
                 "Fit normals to the luminance instead of all three channels (about 2x faster)");
-  cmd->add_option("--specular-clusters", o->specular_clusters,
-                  "Estimate ks and shininess per cluster of the albedo (objects of several "
-                  "materials); 1 = shared by the object")
-      ->check(CLI::Range(1, 16))
-      ->capture_default_str();
-  cmd->add_flag(
-      "--uniform-specular", o->uniform_specular,
-      "Estimated coefficients: one ks per cluster everywhere, instead of scaled per pixel "
-      "(specular.exr)");
-  cmd->add_option("--specular-prior", o->specular_prior,
-                  "Pull of each pixel's specular strength toward the estimated one, in "
-                  "observations of the lobe's peak (lower follows varying gloss more freely)")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
   cmd->add_flag("--integrate", o->integrate,
                 "Also integrate the normals: height.exr, mesh.ply (albedo colours), height.png");
   AddCaptureOptions(cmd, o->capture);

@@ -122,7 +122,7 @@ def _image_stack(images, k, encoding):
 
 @_short_type_errors
 def estimate_normals(images, light_directions, light_intensities=None, mask=None,
-                     model="phong", material=None, *args, encoding=None, **kwargs):
+                     model=None, material=None, *args, encoding=None, **kwargs):
     try:
         k = len(light_directions)
     except TypeError:

@@ -1,7 +1,9 @@
 // Pieces shared by the solvers of src/solve (not part of the public interface).
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <vector>
 
 #include "core/types.h"
@@ -17,57 +19,122 @@ inline double Luminance(const Vec3d& rgb) {
   return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
 }
 
-// The albedo minimizing Σ_j w_j (y_jc − kd_c·diffuse_j − ks_c·specular_j)² for each of
-// `channels` (≤ 3) channels, clamped at 0: the variable-projection step of every fit,
-//   kd_c = (Σ w d y_c − ks_c Σ w d s) / Σ w d²,
-// in one pass over the lights. y(j, c) is observation j of channel c (a plain number or a T),
-// ks(c) the channel's specular coefficient, weight(j) the observation's weight.
-// With `specular_scale`, ks is scaled by one more unknown σ ≥ 0 shared by the channels, found in
-// the same pass: substituting kd_c(σ) leaves a linear equation in σ (with a prior λ(σ − 1)²Σks²),
-//   σ Σ_c ks_c² (S − X²/D + λ) = Σ_c ks_c (B_c − A_c X/D) + λ Σ_c ks_c²,
-// with D = Σ w d², X = Σ w d s, S = Σ w s², A_c = Σ w d y_c, B_c = Σ w s y_c.
-template <typename T, typename Ks, typename Y, typename Weight>
-std::array<T, 3> EliminatedAlbedo(const std::vector<reflectance::LightFactors<T>>& factors,
-                                  int channels, Ks ks, Y y, Weight weight,
-                                  T* specular_scale = nullptr, double scale_prior = 1) {
+// The linear coefficients of one channel's fit y_j ≈ kd·d_j + ks·s_j, both ≥ 0.
+template <typename T>
+struct CoefficientPair {
+  T kd = T(0);
+  T ks = T(0);
+};
+
+// Non-negative least squares in (kd, ks) from the weighted sums D = Σ w d², X = Σ w d s,
+// S = Σ w s², A = Σ w d y, B = Σ w s y: the free solution of [D X; X S][kd ks]ᵀ = [A B]ᵀ when
+// it lies in the quadrant, else the better of the two one-coefficient fits (their cost falls
+// by A²/D and B²/S). Where s is (nearly) a multiple of d, or absent, ks = 0: the lobe cannot be
+// told from the diffuse term there. Branches are on values, so a Jet carries the derivative of
+// whichever branch applies.
+//
+// A prior λ(ks − ks0)² (λ in observations of the lobe's peak) enters as S + λ and B + λ·ks0.
+template <typename T>
+CoefficientPair<T> NonNegativePair(const T& d, const T& x, const T& s_data, const T& a,
+                                   const T& b_data, double prior_weight = 0, double prior_ks = 0) {
+  const T s = s_data + prior_weight;
+  const T b = b_data + prior_weight * prior_ks;
+  CoefficientPair<T> c;
+  const T det = d * s - x * x;
+  if (det > T(1e-9) * d * s && d > T(1e-12)) {
+    const T kd = (a * s - b * x) / det;
+    const T ks = (b * d - a * x) / det;
+    if (kd >= T(0) && ks >= T(0)) return {kd, ks};
+  }
+  const bool diffuse_ok = d > T(1e-12) && a > T(0);
+  const bool specular_ok = s > T(1e-12) && b > T(0) && det > T(1e-9) * d * s;
+  const T gain_d = diffuse_ok ? a * a / d : T(0);
+  const T gain_s = specular_ok ? b * b / s : T(0);
+  if (diffuse_ok && !(gain_s > gain_d)) c.kd = a / d;
+  if (specular_ok && gain_s > gain_d) c.ks = b / s;
+  return c;
+}
+
+// The coefficients minimizing Σ_j w_j (y_jc − kd_c·d_j − ks_c·s_j)² for each of `channels` (≤ 3)
+// channels, all ≥ 0: the variable-projection step of every fit. With `fixed_ks` (known
+// coefficients) only kd_c = (A_c − ks_c X)/D is solved, clamped at 0; otherwise both per channel
+// (NonNegativePair), so a specular colour of any hue — white on plastic, the surface's own on
+// metal — is found rather than assumed. y(j, c) is observation j of channel c (a number or a T),
+// weight(j) its weight, factors[j] the model's (d_j, s_j).
+// With `prior_ks` (free ks only), each channel's ks is pulled toward prior_ks[c] with weight
+// `prior_weight` (NonNegativePair).
+template <typename T, typename Y, typename Weight>
+std::array<CoefficientPair<T>, 3> EliminatedCoefficients(
+    const std::vector<reflectance::LightFactors<T>>& factors, int channels, const double* fixed_ks,
+    Y y, Weight weight, const double* prior_ks = nullptr, double prior_weight = 0) {
   T d = T(0), x = T(0), s = T(0);
   std::array<T, 3> a = {T(0), T(0), T(0)}, b = {T(0), T(0), T(0)};
   for (std::size_t j = 0; j < factors.size(); ++j) {
     const double w = weight(j);
     if (w == 0) continue;
-    const T wd = w * factors[j].diffuse;
+    const T wd = w * factors[j].diffuse, ws = w * factors[j].specular;
     d += wd * factors[j].diffuse;
     x += wd * factors[j].specular;
-    for (int c = 0; c < channels; ++c) a[c] += wd * y(j, c);
-    if (specular_scale) {
-      const T ws = w * factors[j].specular;
-      s += ws * factors[j].specular;
-      for (int c = 0; c < channels; ++c) b[c] += ws * y(j, c);
-    }
-  }
-  if (!(d > T(1e-12))) {
-    if (specular_scale) *specular_scale = T(1);
-    return {T(0), T(0), T(0)};
-  }
-  T sigma = T(1);
-  if (specular_scale) {
-    // The prior toward the estimated strength (σ = 1), worth λ observations of the lobe's peak:
-    // a pixel that sees no highlight keeps σ near 1 instead of dividing noise by nothing.
-    T num = T(0), den = T(0);
+    s += ws * factors[j].specular;
     for (int c = 0; c < channels; ++c) {
-      num += ks(c) * (b[c] - a[c] * x / d) + scale_prior * ks(c) * ks(c);
-      den += ks(c) * ks(c) * (s - x * x / d + T(scale_prior));
+      a[c] += wd * y(j, c);
+      b[c] += ws * y(j, c);
     }
-    sigma = den > T(1e-24) ? num / den : T(1);
-    if (sigma < T(0)) sigma = T(0);
-    *specular_scale = sigma;
   }
-  std::array<T, 3> kd = {T(0), T(0), T(0)};
+  std::array<CoefficientPair<T>, 3> out;
+  if (!(d > T(1e-12))) return out;
   for (int c = 0; c < channels; ++c) {
-    kd[c] = (a[c] - sigma * ks(c) * x) / d;
-    if (kd[c] < T(0)) kd[c] = T(0);
+    if (fixed_ks) {
+      out[c].ks = T(fixed_ks[c]);
+      out[c].kd = (a[c] - fixed_ks[c] * x) / d;
+      if (out[c].kd < T(0)) out[c].kd = T(0);
+    } else {
+      out[c] = prior_ks ? NonNegativePair(d, x, s, a[c], b[c], prior_weight, prior_ks[c])
+                        : NonNegativePair(d, x, s, a[c], b[c]);
+    }
   }
-  return kd;
+  return out;
 }
+
+// Shadows are censored observations. A cast shadow, or a light the pixel sees only in part,
+// makes an observation darker than the model predicts by an amount that says nothing about the
+// normal: all it says is "less light arrived". So a residual r = y − model is charged
+//   ρ(r) = max(r, −t)²,
+// the squared error above −t and the constant t² below it: a fit is never pulled to explain
+// darkness, yet an observation brighter than predicted (where the model's highlight or diffuse
+// term falls short) keeps its full weight, which is what rejects a normal that predicts a shadow
+// where the pixel is lit. t = shadow_threshold × the pixel's brightness (BrightnessScale).
+inline double CensoredCost(double r, double t) {
+  const double c = std::max(r, -t);
+  return c * c;
+}
+
+// The weight of an observation in the iteratively reweighted fit of ρ: 1 where the residual is
+// above −t, 0 where it is censored (a truncated quadratic's reweighting).
+inline double CensoredWeight(double r, double t) { return r >= -t ? 1.0 : 0.0; }
+
+// A pixel's brightness for the censoring threshold: the mean of its brightest tenth of usable
+// observations (at least one), so it follows the pixel's lit level however many of its images
+// are shadowed. `values` is modified (partially sorted).
+inline double BrightnessScale(std::vector<double>& values) {
+  if (values.empty()) return 1e-6;
+  const std::size_t n = std::max<std::size_t>(1, values.size() / 10);
+  std::nth_element(values.begin(), values.begin() + (n - 1), values.end(), std::greater<double>());
+  double sum = 0;
+  for (std::size_t i = 0; i < n; ++i) sum += values[i];
+  return std::max(sum / n, 1e-6);
+}
+
+enum class PixelStatus { kSolved, kDark, kUnderdetermined };
+
+// One pixel's answer, as it passes from Woodham to the search and the local fit.
+struct PixelSolution {
+  PixelStatus status = PixelStatus::kSolved;
+  Vec3d normal = Vec3d(0, 0, 1);
+  Vec3d albedo = Vec3d::Zero();
+  Vec3d specular = Vec3d::Zero();  // this pixel's ks (RGB)
+  double residual = -1;
+  int iterations = 0;
+};
 
 }  // namespace iphong::solve::internal

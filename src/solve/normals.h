@@ -1,25 +1,15 @@
-// Normal recovery: per-pixel unit normals and RGB albedo from K ≥ 3 images under known lights,
-// by inverting the shared Phong model (reflectance/phong.h) with Ceres.
+// Normal recovery: per-pixel unit normals, RGB albedo and specular coefficients from K ≥ 3 images
+// under known lights, by inverting the shared Phong model (reflectance/phong.h).
 //
-// 1. Woodham's Lambertian least squares per pixel on the luminance of I_j / E_j, using the
-//    observations left after dropping the darkest and brightest fractions (shadows, highlights).
-//    This is also the `lambert` result.
-// 2. A per-pixel nonlinear fit of the Phong (or Blinn-Phong) model: Levenberg–Marquardt with
-//    ceres::Jet autodiff through the shared model. The unknowns are 2: the normal on a
-//    tangent-plane chart around the Woodham estimate (re-centred when the fit strays from it, so
-//    the chart never degenerates). The RGB albedo is linear in the residuals and eliminated in
-//    closed form (variable projection). The model runs once per light and trial point; the
-//    normal equations, robust weights, albedo and residual are all drawn from that run. Cauchy
-//    weights (iteratively reweighted, one per image) absorb cast shadows and interreflections;
-//    attached shadows are in the model (N·L ≤ 0 gives the ambient value); saturated observations
-//    are dropped. Optionally (restart_residual), where the residual stays large, a second start
-//    from Woodham on the darker observations; the lower robust cost wins.
-// 3. Without known coefficients, ks (RGB), the shininess and the ambient term Ia⊙ka (RGB) are
-//    estimated jointly with the normals: rounds of a
-//    global Ceres fit over a sample of pixels (normals fixed, albedo eliminated) alternate with
-//    the per-pixel fits. When no highlight is seen they are reported as not identifiable. They
-//    are shared by the object, or estimated per cluster of the albedo (specular_clusters), and
-//    their strength may vary from pixel to pixel (varying_specular).
+// `lambert`: Woodham's least squares (woodham.h), the baseline. Otherwise, per pixel:
+// 1. The model: with known coefficients (material.json) the given one; else the lobe and its
+//    shininess the data support, chosen by held-out prediction among Lambert, Phong and
+//    Blinn-Phong (model_choice.h), ks then free per pixel and channel.
+// 2. A global search over candidate normals on the visible hemisphere (search.h), scored by the
+//    censored cost of the observations, so the fit cannot start in a wrong basin.
+// 3. A local Levenberg–Marquardt fit from the winner (pixel_fit.h): two unknowns on a chart of
+//    the normal, kd and ks eliminated in closed form; shadows are censored observations
+//    (internal::CensoredCost), saturated ones unused.
 // Frame: SPEC.md's camera frame, orthographic view V = (0, 0, 1).
 #pragma once
 
@@ -30,50 +20,43 @@
 #include <vector>
 
 #include "reflectance/material.h"
+#include "solve/model_choice.h"
 #include "solve/photometric_data.h"
 
 namespace iphong::solve {
 
 struct NormalOptions {
-  reflectance::Lobe model = reflectance::Lobe::kPhong;  // kLambert: Woodham only
+  // The lobe. Estimated coefficients: the family the shininess (and, with choose_model, the lobe)
+  // is chosen from; kLambert: Woodham alone.
+  reflectance::Lobe model = reflectance::Lobe::kPhong;
+  // Estimated coefficients: choose among Lambert, Phong and Blinn-Phong by held-out prediction
+  // (model_choice.h) instead of using `model`'s family alone.
+  bool choose_model = true;
   // Woodham: fractions of each pixel's observations dropped, darkest and brightest first.
   double discard_dark = 0.3;
   double discard_bright = 0.1;
   // Observations with a channel at or above this value are treated as saturated and unused.
   double saturation = 0.995;
-  // Cauchy scale relative to the pixel's mean observation.
-  double robust_scale = 0.15;
-  int irls_rounds = 4;
-  // A fit whose RMS residual exceeds this fraction of the pixel's mean value is restarted from
-  // Woodham on the darker observations (guards against local minima near highlights); the lower
-  // robust cost wins. Off by default: on renders it gains little (0.014° → 1e-5° in the test),
-  // and on DiLiGenT the robust cost picked the worse normal where shadows and interreflections
-  // dominate (cat 5.89° without, 5.95° at 0.02 and 0.08; pot1 crop 8.18° vs 8.37°), at twice
-  // the time (43% of cat's pixels restarted at 0.02).
-  double restart_residual = std::numeric_limits<double>::infinity();
-  // Fit the normal to all three channels (each with its own albedo). Off: to their luminance,
-  // exact under the model and about twice as fast, a little less accurate on real photos.
+  // Shadow censoring: an observation darker than the model by more than this fraction of the
+  // pixel's brightness costs no more (internal::CensoredCost). Noise is ~1% of the brightness,
+  // a cast shadow removes the whole direct term: 0.1 lies between; measured on DiLiGenT in the
+  // README (0.05 … 0.2 change the mean error by under 0.5° on ball, cat, pot1, cow, harvest).
+  double shadow_threshold = 0.1;
+  int irls_rounds = 4;  // censoring rounds of the local fit
+  // Candidate normals of the global search (search.h): ~1000 spaces them 4.5° apart, finer than
+  // the narrowest lobe the choice offers is wide.
+  int search_candidates = 1000;
+  int model_sample = 300;  // pixels the model choice scores
+  // Fit the normal to all three channels (each with its own coefficients). Off: to their
+  // luminance, exact under the model and about twice as fast, a little less accurate on photos.
   bool color_residuals = true;
   int max_iterations = 10;  // per pixel and round
 
-  // Known coefficients (material.json). Otherwise ks and shininess are estimated.
+  // Known coefficients (material.json). Otherwise the model is chosen and ks is free per pixel.
   bool material_known = false;
   Vec3d ambient_term = Vec3d::Zero();  // Ia ⊙ ka, subtracted from every image
   Vec3d ks = Vec3d::Zero();
   double shininess = 1;
-  int specular_rounds = 2;
-  int specular_sample = 500;  // pixels in the global fit (per cluster)
-  // Objects of several materials: ks, shininess and the ambient term per cluster of the
-  // (Woodham) albedo, by k-means on its chromaticity and brightness. 1 = shared by the object.
-  int specular_clusters = 1;
-  // Estimated coefficients only: each pixel's ks is its cluster's times a scale σ ≥ 0, eliminated
-  // in closed form with the albedo, for gloss that varies over the surface (glaze, wear, paint).
-  // Known coefficients (material.json) are used as given.
-  bool varying_specular = true;
-  // The pull of σ toward 1, in observations of the lobe's peak. 1 suits DiLiGenT's 96 lights;
-  // with few lights or rare highlights it shrinks σ noticeably (a weaker pull follows gloss
-  // better where every pixel sees a highlight).
-  double specular_prior = 1;
   // A known uniform albedo kd: what one or two images need (RecoverNormals).
   std::optional<Vec3d> known_albedo;
 
@@ -87,42 +70,28 @@ struct NormalOptions {
 struct NormalSummary {
   bool success = false;
   std::string message;
-  double init_seconds = 0;      // Woodham
-  double specular_seconds = 0;  // global fits of ks and shininess
-  double solve_seconds = 0;     // per-pixel nonlinear fits
-  long long iterations = 0;     // per-pixel solver iterations, summed
+  double init_seconds = 0;   // Woodham (lambert) or reading the observations
+  double model_seconds = 0;  // choosing the model by held-out prediction
+  double solve_seconds = 0;  // global search and local fits
+  long long iterations = 0;  // local-fit iterations, summed
   std::size_t pixels = 0;
   std::size_t dark_pixels = 0;             // dark in every image: no normal (flagged)
   std::size_t underdetermined_pixels = 0;  // fewer than 3 usable lights (flagged)
 };
 
-// The specular coefficients of one albedo cluster (of the whole object when there is one).
-struct SpecularCluster {
-  Vec3d albedo_center = Vec3d::Zero();  // mean Woodham albedo of its pixels
-  std::size_t pixels = 0;
-  Vec3d ks = Vec3d::Zero();
-  double shininess = 1;
-  Vec3d ambient_term = Vec3d::Zero();
-  bool estimated = false;  // false: known (material.json) or not identifiable
-  bool identifiable = true;
-  std::string note;
-};
-
 struct NormalResult {
   ImageF normals;   // 3 channels, unit xyz in the camera frame; 0 outside the mask
   ImageF albedo;    // 3 channels, kd
-  ImageF specular;  // 3 channels, each pixel's ks (its cluster's, times σ); empty for lambert
+  ImageF specular;  // 3 channels, each pixel's ks; empty for lambert
   ImageF residual;  // 1 channel: RMS model residual per pixel; −1 where no normal was found
-  reflectance::Lobe model = reflectance::Lobe::kPhong;
-  Vec3d ks = Vec3d::Zero();
+  reflectance::Lobe model = reflectance::Lobe::kPhong;  // the lobe used
+  Vec3d ks = Vec3d::Zero();                             // known, or the median of the pixels' ks
   double shininess = 1;
-  Vec3d ambient_term = Vec3d::Zero();  // Ia ⊙ ka, known or estimated
+  Vec3d ambient_term = Vec3d::Zero();  // Ia ⊙ ka (known; 0 when estimated)
   bool material_estimated = false;
-  bool specular_identifiable = true;
+  bool specular_identifiable = true;  // false: the choice found no specular model predicts better
   std::string specular_note;
-  // One per cluster; ks, shininess and ambient_term above are the largest cluster's.
-  std::vector<SpecularCluster> clusters;
-  ImageF cluster_map;  // 1 channel: the cluster of each pixel, −1 outside (clusters > 1 only)
+  ModelChoice model_choice;  // estimated coefficients: every model's held-out score
   // One or two images only: the angle the data alone leaves open per pixel (few_images.h).
   ImageF ambiguity_deg;
   NormalSummary summary;

@@ -1,0 +1,337 @@
+#include "solve/model_choice.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <random>
+
+#include "core/parallel.h"
+#include "solve/search.h"
+
+namespace iphong::solve {
+
+double LobeHalfWidthDeg(reflectance::Lobe lobe, double shininess) {
+  // (R·V)^n = 1/2 at cos ψ = 2^(−1/n), ψ the angle between L and V's mirror direction. N·H
+  // turns half as fast as L, so a Blinn-Phong lobe is twice as wide in the light's angle.
+  const double psi = std::acos(std::pow(0.5, 1.0 / std::max(shininess, 1e-9))) * 180 / M_PI;
+  return lobe == reflectance::Lobe::kBlinnPhong ? 2 * psi : psi;
+}
+
+double MinimumShininess(reflectance::Lobe lobe) {
+  const double half = kMaxLobeHalfWidthDeg * M_PI / 180;
+  const double n = std::log(0.5) / std::log(std::cos(half));  // Phong: ψ = the half width
+  return lobe == reflectance::Lobe::kBlinnPhong ? std::log(0.5) / std::log(std::cos(half / 2)) : n;
+}
+
+std::vector<ModelCandidate> ModelFamily(std::optional<reflectance::Lobe> only) {
+  std::vector<ModelCandidate> family;
+  using reflectance::Lobe;
+  if (!only || *only == Lobe::kLambert) family.push_back({Lobe::kLambert, 1});
+  for (Lobe lobe : {Lobe::kPhong, Lobe::kBlinnPhong}) {
+    if (only && *only != lobe) continue;
+    // Six factors of 2 from the widest lobe that is still a highlight: half widths 30° … ~4°.
+    for (int i = 0; i < 6; ++i) family.push_back({lobe, MinimumShininess(lobe) * std::pow(2.0, i)});
+  }
+  return family;
+}
+
+namespace {
+
+struct Sample {
+  std::vector<double> y, usable;  // K each
+  double threshold = 0;
+};
+
+// The mean held-out cost of one model over the sample, its standard error and the mean angle
+// between the two halves' normals.
+// Returns the per-pixel costs, for paired comparisons.
+std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
+                                const std::vector<Sample>& sample, const std::vector<int>& fold,
+                                const ModelChoiceSettings& settings) {
+  reflectance::ModelOptions model;
+  model.lobe = m.lobe;
+  const CandidateTable table(data.light_directions, model, m.shininess, settings.search_candidates);
+  const int k = data.images;
+  std::vector<double> cost(sample.size(), 0.0), angle(sample.size(), 0.0);
+  ParallelFor(0, sample.size(), 16, settings.threads, [&](std::size_t b, std::size_t e) {
+    NormalSearch search(
+        table, 16,
+        m.ks_prior_weight > 0 ? std::optional(internal::Luminance(m.ks_prior)) : std::nullopt,
+        m.ks_prior_weight);
+    std::vector<double> usable(k);
+    for (std::size_t i = b; i < e; ++i) {
+      const Sample& s = sample[i];
+      int chosen[2] = {-1, -1};
+      for (int half = 0; half < 2; ++half) {
+        for (int j = 0; j < k; ++j) usable[j] = fold[j] == half ? s.usable[j] : 0.0;
+        const SearchResult r = search.Search(s.y.data(), usable.data(), s.threshold, nullptr);
+        chosen[half] = r.candidate;
+        if (r.candidate < 0) continue;
+        const float* d = table.diffuse(r.candidate);
+        const float* sp = table.specular(r.candidate);
+        for (int j = 0; j < k; ++j) {
+          if (fold[j] == half || s.usable[j] == 0) continue;
+          cost[i] += internal::CensoredCost(s.y[j] - r.kd * d[j] - r.ks * sp[j], s.threshold) /
+                     (s.threshold * s.threshold);
+        }
+      }
+      if (chosen[0] >= 0 && chosen[1] >= 0) {
+        const double c = table.normal(chosen[0]).dot(table.normal(chosen[1]));
+        angle[i] = std::acos(std::clamp(c, -1.0, 1.0)) * 180 / M_PI;
+      }
+    }
+  });
+  const double n = static_cast<double>(std::max<std::size_t>(1, sample.size()));
+  double sum = 0, sq = 0;
+  for (double c : cost) sum += c, sq += c * c;
+  m.heldout_cost = sum / n;
+  m.heldout_error = std::sqrt(std::max(0.0, sq / n - m.heldout_cost * m.heldout_cost) / n);
+  m.fold_angle_deg = std::accumulate(angle.begin(), angle.end(), 0.0) / n;
+  return cost;
+}
+
+// Mean and standard error of the per-pixel difference a − b.
+std::pair<double, double> PairedDifference(const std::vector<double>& a,
+                                           const std::vector<double>& b) {
+  const double n = static_cast<double>(std::max<std::size_t>(1, a.size()));
+  double sum = 0, sq = 0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    sum += a[i] - b[i], sq += (a[i] - b[i]) * (a[i] - b[i]);
+  const double mean = sum / n;
+  return {mean, std::sqrt(std::max(0.0, sq / n - mean * mean) / n)};
+}
+
+// Pixels at an even stride over the object with at least 3 usable observations (in each half,
+// with `fold`).
+std::vector<Sample> SamplePixels(const PhotometricData& data, const ModelChoiceSettings& settings,
+                                 const std::vector<int>* fold) {
+  const int k = data.images;
+  std::vector<Sample> sample;
+  const std::size_t pixels = data.pixel_count();
+  const std::size_t stride = std::max<std::size_t>(1, pixels / std::max(1, settings.sample));
+  PixelFitter fitter(data, settings.fit);
+  for (std::size_t p = stride / 2; p < pixels; p += stride) {
+    if (!fitter.Prepare(p)) continue;
+    Sample s;
+    s.y.assign(fitter.luminance(), fitter.luminance() + k);
+    s.usable.assign(fitter.usable(), fitter.usable() + k);
+    s.threshold = fitter.threshold();
+    int per_half[2] = {0, 0};
+    for (int j = 0; j < k; ++j) per_half[fold ? (*fold)[j] : j % 2] += s.usable[j] != 0;
+    if (per_half[0] >= 3 && per_half[1] >= 3) sample.push_back(std::move(s));
+  }
+  return sample;
+}
+
+}  // namespace
+
+Vec3d EstimateAmbient(const PhotometricData& data) {
+  const std::size_t pixels = data.pixel_count();
+  if (pixels == 0) return Vec3d::Zero();
+  Vec3d out;
+  std::vector<double> darkest(pixels);
+  for (int c = 0; c < 3; ++c) {
+    for (std::size_t p = 0; p < pixels; ++p) {
+      const float* obs = data.pixel(p);
+      double m = INFINITY;
+      for (int j = 0; j < data.images; ++j) m = std::min(m, static_cast<double>(obs[3 * j + c]));
+      darkest[p] = m;
+    }
+    const std::size_t q = pixels / 4;
+    std::nth_element(darkest.begin(), darkest.begin() + q, darkest.end());
+    out[c] = std::max(0.0, darkest[q]);
+  }
+  return out;
+}
+
+Vec3d SharedSpecular(const PhotometricData& data, const ModelCandidate& model,
+                     const ModelChoiceSettings& settings) {
+  const std::vector<Sample> sample = SamplePixels(data, settings, nullptr);
+  if (sample.empty() || model.lobe == reflectance::Lobe::kLambert) return Vec3d::Zero();
+  reflectance::ModelOptions options;
+  options.lobe = model.lobe;
+  const CandidateTable table(data.light_directions, options, model.shininess,
+                             settings.search_candidates);
+  const int k = data.images;
+  std::vector<std::array<double, 3>> ks(sample.size(), {0, 0, 0});
+  std::vector<int> ok(sample.size(), 0);
+  // Sample pixels were taken at the same stride: recover their indices for the RGB values.
+  const std::size_t pixels = data.pixel_count();
+  const std::size_t stride = std::max<std::size_t>(1, pixels / std::max(1, settings.sample));
+  std::vector<std::size_t> index;
+  {
+    PixelFitter fitter(data, settings.fit);
+    for (std::size_t p = stride / 2; p < pixels; p += stride) {
+      if (!fitter.Prepare(p)) continue;
+      int per_half[2] = {0, 0};
+      for (int j = 0; j < k; ++j) per_half[j % 2] += fitter.usable()[j] != 0;
+      if (per_half[0] >= 3 && per_half[1] >= 3) index.push_back(p);
+    }
+  }
+  ParallelFor(0, sample.size(), 16, settings.threads, [&](std::size_t b, std::size_t e) {
+    NormalSearch search(table);
+    std::vector<reflectance::LightFactors<double>> f(k);
+    for (std::size_t i = b; i < e; ++i) {
+      const Sample& s = sample[i];
+      const SearchResult fit = search.Search(s.y.data(), s.usable.data(), s.threshold, nullptr);
+      if (fit.candidate < 0) continue;
+      const float* obs = data.pixel(index[i]);
+      std::vector<double> w(k);
+      for (int j = 0; j < k; ++j) {
+        f[j] = {table.diffuse(fit.candidate)[j], table.specular(fit.candidate)[j]};
+        const double r = s.y[j] - fit.kd * f[j].diffuse - fit.ks * f[j].specular;
+        w[j] = s.usable[j] * internal::CensoredWeight(r, s.threshold);
+      }
+      const auto c = internal::EliminatedCoefficients<double>(
+          f, 3, nullptr,
+          [&](std::size_t j, int ch) {
+            return (obs[3 * j + ch] - settings.fit.ambient_term[ch]) /
+                   data.light_intensities[j][ch];
+          },
+          [&](std::size_t j) { return w[j]; });
+      ks[i] = {c[0].ks, c[1].ks, c[2].ks};
+      ok[i] = 1;
+    }
+  });
+  Vec3d out;
+  for (int c = 0; c < 3; ++c) {
+    std::vector<double> v;
+    for (std::size_t i = 0; i < ks.size(); ++i)
+      if (ok[i]) v.push_back(ks[i][c]);
+    if (v.empty()) return Vec3d::Zero();
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    out[c] = v[v.size() / 2];
+  }
+  return out;
+}
+
+ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate> family,
+                        const ModelChoiceSettings& settings) {
+  ModelChoice choice;
+  const int k = data.images;
+  if (k < 6 || family.size() == 1) {
+    choice.chosen = family.size() == 1 ? family[0] : ModelCandidate{};
+    choice.note = family.size() == 1 ? "the only model asked for"
+                                     : "fewer than 6 lights: no half can be held out to test a "
+                                       "specular model, so the Lambertian one is used";
+    return choice;
+  }
+  // Two halves of the lights, fixed for every model: a shuffled alternation, so that each half
+  // covers the directions of the whole set.
+  std::vector<int> fold(k);
+  for (int j = 0; j < k; ++j) fold[j] = j % 2;
+  std::mt19937 rng(20261123);
+  std::shuffle(fold.begin(), fold.end(), rng);
+  const std::vector<Sample> sample = SamplePixels(data, settings, &fold);
+  choice.pixels = sample.size();
+  // The same pixels with the estimated ambient term subtracted, for the models that assume it.
+  const Vec3d ambient = EstimateAmbient(data);
+  ModelChoiceSettings with_ambient = settings;
+  with_ambient.fit.ambient_term = ambient;
+  const std::vector<Sample> sample_ambient =
+      ambient.isZero() ? std::vector<Sample>() : SamplePixels(data, with_ambient, &fold);
+  const auto held_out = [&](ModelCandidate& m) {
+    return HeldOutCost(data, m, m.ambient_term.isZero() ? sample : sample_ambient, fold, settings);
+  };
+  if (sample.empty()) {
+    choice.chosen = family.front();
+    choice.note = "no pixel with 3 usable observations in each half: not tested";
+    return choice;
+  }
+  std::vector<std::vector<double>> costs;
+  for (ModelCandidate& m : family) costs.push_back(held_out(m));
+  choice.scored = family;
+  const auto lowest = [&] {
+    return static_cast<std::size_t>(
+        std::min_element(choice.scored.begin(), choice.scored.end(),
+                         [](const ModelCandidate& a, const ModelCandidate& b) {
+                           return a.heldout_cost < b.heldout_cost;
+                         }) -
+        choice.scored.begin());
+  };
+  // Between the grid's factors of 2: one step of √2 each way (not wider than a highlight).
+  if (const ModelCandidate grid_best = choice.scored[lowest()];
+      grid_best.lobe != reflectance::Lobe::kLambert) {
+    for (double f : {std::sqrt(0.5), std::sqrt(2.0)}) {
+      ModelCandidate m = grid_best;
+      m.shininess *= f;
+      if (m.shininess < MinimumShininess(m.lobe)) continue;
+      costs.push_back(held_out(m));
+      choice.scored.push_back(m);
+    }
+    // Then a golden-section search of log n within √2 either side of the best of the three, so
+    // the shininess is not left on the grid (five more evaluations: within 4%).
+    const ModelCandidate centre = choice.scored[lowest()];
+    if (centre.lobe == grid_best.lobe) {
+      double lo =
+          std::log(std::max(centre.shininess / std::sqrt(2.0), MinimumShininess(centre.lobe)));
+      double hi = std::log(centre.shininess * std::sqrt(2.0));
+      const double g = (std::sqrt(5.0) - 1) / 2;
+      const auto evaluate = [&](double log_n) {
+        ModelCandidate m = centre;
+        m.shininess = std::exp(log_n);
+        costs.push_back(held_out(m));
+        choice.scored.push_back(m);
+        return m.heldout_cost;
+      };
+      double a = hi - g * (hi - lo), b = lo + g * (hi - lo);
+      double fa = evaluate(a), fb = evaluate(b);
+      for (int i = 0; i < 3; ++i) {
+        if (fa < fb) {
+          hi = b, b = a, fb = fa, a = hi - g * (hi - lo), fa = evaluate(a);
+        } else {
+          lo = a, a = b, fa = fb, b = lo + g * (hi - lo), fb = evaluate(b);
+        }
+      }
+    }
+  }
+  // With or without an ambient term: only where the pixels on the same sample (their sizes match
+  // when no pixel changed its usable count) predict better with it.
+  if (!ambient.isZero() && sample_ambient.size() == sample.size()) {
+    ModelCandidate m = choice.scored[lowest()];
+    m.ambient_term = ambient;
+    costs.push_back(held_out(m));
+    choice.scored.push_back(m);
+  }
+  // How far each pixel's ks may stray from the object's: free, or pulled toward it with the
+  // weight of 1 or 10 observations of the lobe's peak, also by prediction.
+  if (const ModelCandidate lobe_best = choice.scored[lowest()];
+      lobe_best.lobe != reflectance::Lobe::kLambert) {
+    const Vec3d shared =
+        SharedSpecular(data, lobe_best, lobe_best.ambient_term.isZero() ? settings : with_ambient);
+    for (double weight : {1.0, 10.0}) {
+      ModelCandidate m = lobe_best;
+      m.ks_prior = shared;
+      m.ks_prior_weight = weight;
+      costs.push_back(held_out(m));
+      choice.scored.push_back(m);
+    }
+  }
+  // Prediction first; among the models whose held-out cost is not distinguishable from the
+  // lowest (paired over the same pixels, within one standard error), the one whose two halves
+  // agree best on the normal: two models can predict the images equally well while one of them
+  // leaves the normal less determined.
+  const std::size_t lowest_index = lowest();
+  std::size_t pick = lowest_index;
+  for (std::size_t i = 0; i < choice.scored.size(); ++i) {
+    const auto [mean, error] = PairedDifference(costs[i], costs[lowest_index]);
+    if (mean <= error && choice.scored[i].fold_angle_deg < choice.scored[pick].fold_angle_deg) {
+      pick = i;
+    }
+  }
+  const ModelCandidate best = choice.scored[pick];
+  choice.chosen = best;
+  char text[160];
+  std::snprintf(text, sizeof text, "held-out cost %.3g per pixel on %zu pixels, Lambert's %.3g",
+                best.heldout_cost, sample.size(), choice.scored.front().heldout_cost);
+  choice.note = text;
+  if (choice.scored.front().lobe != reflectance::Lobe::kLambert) {
+    choice.note = "held-out cost " + std::to_string(best.heldout_cost) + " per pixel";
+  }
+  return choice;
+}
+
+}  // namespace iphong::solve

@@ -1,0 +1,73 @@
+// Which reflectance model the data support — Lambert, Phong or Blinn-Phong, and the lobe's
+// shininess — decided by how well each predicts observations it was not fitted to. On a sample
+// of pixels spread over the object, the lights are split in two fixed halves; each model is
+// fitted (the global search, search.h) to one half and charged the censored cost of the other
+// half's observations (internal::CensoredCost, in units of the pixel's t², so every pixel counts
+// alike), then the halves swap. The fitted cost cannot decide: a model with more freedom always
+// fits its own data better. A specular model is used only where it predicts better than Lambert.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "reflectance/phong.h"
+#include "solve/photometric_data.h"
+#include "solve/pixel_fit.h"
+
+namespace iphong::solve {
+
+struct ModelCandidate {
+  reflectance::Lobe lobe = reflectance::Lobe::kLambert;
+  double shininess = 1;
+  // Each pixel's free ks pulled toward the object's (SharedSpecular) with this weight, in
+  // observations of the lobe's peak; 0: free.
+  double ks_prior_weight = 0;
+  Vec3d ks_prior = Vec3d::Zero();
+  Vec3d ambient_term = Vec3d::Zero();  // Ia⊙ka subtracted first (EstimateAmbient) or 0
+  double heldout_cost = 0;             // mean per pixel, in units of t²; filled by ChooseModel
+  double heldout_error = 0;            // its standard error over the pixels
+  double fold_angle_deg = 0;           // mean angle between the normals the two halves chose
+};
+
+// A specular lobe is a highlight only while it is clearly narrower than the diffuse term, whose
+// cosine falls to half at 60° from its peak: a lobe as broad can trade places with it (the pixel
+// explained by a lobe around a normal tilted half as far), and prediction cannot tell the two
+// apart. So lobes are at most half as wide: a half width of 30° in the light's angle.
+constexpr double kMaxLobeHalfWidthDeg = 30;
+
+// The half width at half maximum of a lobe, in degrees of the light's direction.
+double LobeHalfWidthDeg(reflectance::Lobe lobe, double shininess);
+// The shininess whose lobe is kMaxLobeHalfWidthDeg wide: Phong 4.8, Blinn-Phong 19.9.
+double MinimumShininess(reflectance::Lobe lobe);
+
+// The models tried: Lambert, then each lobe from its minimum shininess up in six factors of 2
+// (half widths 30° down to about 4°). With `only` set, that lobe's alone.
+std::vector<ModelCandidate> ModelFamily(std::optional<reflectance::Lobe> only);
+
+struct ModelChoiceSettings {
+  PixelFitSettings fit;  // saturation, shadow threshold and ambient term of the observations
+  int sample = 300;      // pixels scored
+  int search_candidates = 1000;
+  int threads = 0;
+};
+
+struct ModelChoice {
+  ModelCandidate chosen;
+  std::vector<ModelCandidate> scored;  // every model tried, in the order tried
+  std::size_t pixels = 0;              // pixels scored
+  std::string note;
+};
+
+// Throws nothing; with fewer than 6 lights (no half can be held out) the choice is Lambert.
+ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate> family,
+                        const ModelChoiceSettings& settings);
+
+// The ambient term Ia⊙ka (RGB, image units) when it is not known. Every light adds to the
+// ambient, so a pixel's darkest observation is the ambient itself wherever one light is in
+// attached or cast shadow, and above it otherwise: the estimate is the 25th percentile over the
+// pixels of their darkest observation per channel, right while a quarter of the pixels see one
+// light from behind. Zero for a dark-room capture (DiLiGenT: a few thousandths at most).
+Vec3d EstimateAmbient(const PhotometricData& data);
+
+}  // namespace iphong::solve

@@ -1,0 +1,63 @@
+// The local fit of one pixel's normal: Levenberg–Marquardt on the shared Phong model
+// (reflectance/phong.h) with ceres::Jet autodiff, from the global search's winner (search.h).
+// The unknowns are 2: the normal on a tangent-plane chart around the start (re-centred when the
+// fit strays from it, so the chart never degenerates). The linear coefficients — kd and, unless
+// known, ks of each channel, both ≥ 0 — are eliminated in closed form (variable projection,
+// internal::EliminatedCoefficients), so their dependence on the normal enters the Jacobian.
+// Shadows are censored (internal::CensoredCost): each round refits with the observations the
+// last one found censored left out, until the normal stops moving. Saturated observations are
+// not used. Observations are y_j = (I_j − Ia⊙ka)/E_j; camera frame, V = (0, 0, 1).
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "solve/internal.h"
+#include "solve/photometric_data.h"
+
+namespace iphong::solve {
+
+struct PixelFitSettings {
+  reflectance::ModelOptions model;  // lobe (kLambert: no specular term)
+  double shininess = 1;
+  std::optional<Vec3d> known_ks;  // known coefficients; otherwise ks is free per pixel
+  // Free ks: the object's typical ks (SharedSpecular) each pixel's is pulled toward, with a weight
+  // of `ks_prior_weight` observations of the lobe's peak.
+  std::optional<Vec3d> ks_prior;
+  double ks_prior_weight = 1;
+  Vec3d ambient_term = Vec3d::Zero();  // Ia ⊙ ka
+  double saturation = 0.995;           // a channel at or above: the observation is not used
+  double shadow_threshold = 0.1;       // t as a fraction of the pixel's brightness
+  int rounds = 4;                      // reweighting rounds
+  int max_iterations = 10;             // per round
+  bool color_residuals = true;         // 3 channels, or their luminance (faster)
+};
+
+class PixelFitter {
+ public:
+  PixelFitter(const PhotometricData& data, const PixelFitSettings& settings);
+  ~PixelFitter();
+  PixelFitter(const PixelFitter&) = delete;
+  PixelFitter& operator=(const PixelFitter&) = delete;
+
+  // Reads pixel p's observations; false when fewer than 3 are usable or when every one is dark
+  // (dark() tells which): nothing to fit.
+  bool Prepare(std::size_t p);
+  bool dark() const;
+  // After Prepare: the luminance observations, their usability (0/1) and the censoring
+  // threshold t, for the search.
+  const double* luminance() const;
+  const double* usable() const;
+  double threshold() const;
+
+  // Refines s.normal (unit, the start) in place and sets the albedo, ks, residual (RMS of the
+  // usable observations against the model, in image units) and iterations.
+  void Fit(internal::PixelSolution& s);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace iphong::solve

@@ -1,0 +1,162 @@
+#include "solve/search.h"
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+
+#include "solve/internal.h"
+
+namespace iphong::solve {
+namespace {
+
+using VecF = Eigen::Map<const Eigen::VectorXf>;
+
+}  // namespace
+
+std::vector<Vec3d> HemisphereDirections(int count) {
+  std::vector<Vec3d> out;
+  out.reserve(count);
+  const double golden = M_PI * (3 - std::sqrt(5.0));
+  for (int i = 0; i < count; ++i) {
+    const double z = (i + 0.5) / count;  // uniform in z: equal areas on the sphere
+    const double r = std::sqrt(std::max(0.0, 1 - z * z));
+    out.emplace_back(r * std::cos(golden * i), r * std::sin(golden * i), z);
+  }
+  return out;
+}
+
+CandidateTable::CandidateTable(const std::vector<Vec3d>& light_dir_cam,
+                               const reflectance::ModelOptions& model, double shininess, int count)
+    : lights_(static_cast<int>(light_dir_cam.size())),
+      fine_(count),
+      normals_(HemisphereDirections(count)) {
+  const std::vector<Vec3d> coarse = HemisphereDirections(std::max(4, count / 4));
+  normals_.insert(normals_.end(), coarse.begin(), coarse.end());
+  members_.resize(coarse.size());
+  for (int f = 0; f < count; ++f) {
+    int nearest = 0;
+    for (int c = 1; c < static_cast<int>(coarse.size()); ++c) {
+      if (coarse[c].dot(normals_[f]) > coarse[nearest].dot(normals_[f])) nearest = c;
+    }
+    members_[nearest].push_back(f);
+  }
+  const std::size_t k = lights_;
+  diffuse_.resize(normals_.size() * k);
+  specular_.resize(normals_.size() * k);
+  sums_.resize(3 * normals_.size());
+  for (std::size_t c = 0; c < normals_.size(); ++c) {
+    double dd = 0, ds = 0, ss = 0;
+    for (std::size_t j = 0; j < k; ++j) {
+      const reflectance::LightFactors<double> f = reflectance::ShadingFactors<double>(
+          normals_[c], internal::ViewCam(), light_dir_cam[j], shininess, model);
+      diffuse_[c * k + j] = static_cast<float>(f.diffuse);
+      specular_[c * k + j] = static_cast<float>(f.specular);
+      // The sums from the stored (float) factors, as the pixels' dot products will see them.
+      const double d = diffuse_[c * k + j], s = specular_[c * k + j];
+      dd += d * d;
+      ds += d * s;
+      ss += s * s;
+    }
+    sums_[3 * c] = dd;
+    sums_[3 * c + 1] = ds;
+    sums_[3 * c + 2] = ss;
+  }
+}
+
+std::pair<double, double> NormalSearch::Solve(double d, double x, double s, double a, double b,
+                                              const double* fixed_ks) const {
+  if (fixed_ks) return {d > 1e-12 ? std::max(0.0, (a - *fixed_ks * x) / d) : 0.0, *fixed_ks};
+  const internal::CoefficientPair<double> c =
+      ks_prior_ ? internal::NonNegativePair(d, x, s, a, b, prior_weight_, *ks_prior_)
+                : internal::NonNegativePair(d, x, s, a, b);
+  return {c.kd, c.ks};
+}
+
+NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optional<double> ks_prior,
+                           double prior_weight)
+    : table_(table),
+      refine_(std::max(1, refine)),
+      ks_prior_(ks_prior),
+      prior_weight_(prior_weight) {
+  y_.resize(table.lights());
+  usable_.resize(table.lights());
+  weight_.resize(table.lights());
+  scores_.reserve(table.size());
+}
+
+double NormalSearch::Cost(int c, double t, double kd, double ks) const {
+  const int k = table_.lights();
+  const VecF d(table_.diffuse(c), k), s(table_.specular(c), k), y(y_.data(), k),
+      u(usable_.data(), k);
+  const Eigen::ArrayXf r = (y - static_cast<float>(kd) * d - static_cast<float>(ks) * s)
+                               .array()
+                               .max(static_cast<float>(-t));
+  return (r.square() * u.array()).sum();
+}
+
+double NormalSearch::Refit(int c, double t, const double* fixed_ks, double* kd, double* ks) {
+  const int k = table_.lights();
+  const float* d = table_.diffuse(c);
+  const float* s = table_.specular(c);
+  double sd = 0, sx = 0, sss = 0, sa = 0, sb = 0;
+  for (int j = 0; j < k; ++j) {
+    if (usable_[j] == 0) continue;
+    const double r = y_[j] - *kd * d[j] - *ks * s[j];
+    if (internal::CensoredWeight(r, t) == 0) continue;
+    sd += d[j] * d[j];
+    sx += d[j] * s[j];
+    sss += s[j] * s[j];
+    sa += d[j] * y_[j];
+    sb += s[j] * y_[j];
+  }
+  const auto [new_kd, new_ks] = Solve(sd, sx, sss, sa, sb, fixed_ks);
+  *kd = new_kd;
+  *ks = new_ks;
+  return Cost(c, t, new_kd, new_ks);
+}
+
+SearchResult NormalSearch::Search(const double* y, const double* usable, double t,
+                                  const double* fixed_ks) {
+  const int k = table_.lights();
+  bool all_usable = true;
+  for (int j = 0; j < k; ++j) {
+    y_[j] = static_cast<float>(y[j]);
+    usable_[j] = usable[j] != 0 ? 1.0f : 0.0f;
+    all_usable = all_usable && usable_[j] == 1;
+  }
+  const VecF yv(y_.data(), k), u(usable_.data(), k);
+  const Eigen::VectorXf yu = yv.cwiseProduct(u);
+  const auto score = [&](int c) {
+    const VecF d(table_.diffuse(c), k), s(table_.specular(c), k);
+    double sd, sx, sss;
+    if (all_usable) {
+      sd = table_.dd(c), sx = table_.ds(c), sss = table_.ss(c);
+    } else {
+      sd = d.cwiseProduct(u).dot(d), sx = d.cwiseProduct(u).dot(s), sss = s.cwiseProduct(u).dot(s);
+    }
+    const auto [kd, ks] = Solve(sd, sx, sss, d.dot(yu), s.dot(yu), fixed_ks);
+    return std::pair<double, int>(Cost(c, t, kd, ks), c);
+  };
+  scores_.clear();
+  for (int c = table_.fine_count(); c < table_.size(); ++c) scores_.push_back(score(c));
+  const int coarse_top = std::min<int>(12, static_cast<int>(scores_.size()));
+  std::partial_sort(scores_.begin(), scores_.begin() + coarse_top, scores_.end());
+  for (int i = 0; i < coarse_top; ++i) {
+    for (int f : table_.members(scores_[i].second)) scores_.push_back(score(f));
+  }
+  const int top = std::min<int>(refine_, static_cast<int>(scores_.size()));
+  std::partial_sort(scores_.begin(), scores_.begin() + top, scores_.end());
+  SearchResult best;
+  best.cost = INFINITY;
+  for (int i = 0; i < top; ++i) {
+    const int c = scores_[i].second;
+    double kd = 0, ks = 0;
+    // Start from the least-squares coefficients again (the screening kept only the cost).
+    double cost = Refit(c, INFINITY, fixed_ks, &kd, &ks);
+    for (int round = 0; round < 2; ++round) cost = Refit(c, t, fixed_ks, &kd, &ks);
+    if (cost < best.cost) best = {c, cost, kd, ks};
+  }
+  return best;
+}
+
+}  // namespace iphong::solve

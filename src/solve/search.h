@@ -1,0 +1,96 @@
+// The global search of normal recovery. Every pixel's normal is first chosen among a fixed set
+// of candidate directions covering the visible hemisphere, by the censored cost of all its
+// observations under the model; the local fit (pixel_fit.h) starts from the winner. No start —
+// Woodham's, pulled by highlights and shadows — can then leave a pixel in a wrong basin.
+//
+// For a candidate N the model's factors d_j = max(N·L_j, 0) and s_j = lobe_j(N)
+// (reflectance/phong.h) are the same for every pixel: they are tabulated once, C × K. A pixel's
+// luminance observations y_j = lum((I_j − Ia⊙ka)/E_j) are fitted at each candidate as
+//   y_j ≈ kd·d_j + ks·s_j,   kd, ks ≥ 0 (ks given when the coefficients are known),
+// the two coefficients by least squares (internal::NonNegativePair), and the candidate is scored
+// by the censored cost Σ_j max(y_j − kd d_j − ks s_j, −t)² (internal::CensoredCost). Coarse to
+// fine: a quarter as many coarse directions are scored first; the fine directions nearest to the
+// best 12 of them are scored next. The best `refine` of all scored are then refitted with the
+// censoring's weights (two rounds), as the local fit would, and the lowest censored cost wins.
+// Camera frame, V = (0, 0, 1).
+#pragma once
+
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "core/types.h"
+#include "reflectance/phong.h"
+
+namespace iphong::solve {
+
+// Directions on the visible hemisphere (z > 0), `count` of them on a Fibonacci spiral: equal
+// areas, spacing about sqrt(2π/count) radians.
+std::vector<Vec3d> HemisphereDirections(int count);
+
+// Candidates 0 … fine_count() − 1 are the fine directions, the rest the coarse ones.
+class CandidateTable {
+ public:
+  CandidateTable(const std::vector<Vec3d>& light_dir_cam, const reflectance::ModelOptions& model,
+                 double shininess, int count);
+  int size() const { return static_cast<int>(normals_.size()); }
+  int fine_count() const { return fine_; }
+  // The fine candidates whose nearest coarse direction is coarse candidate c.
+  const std::vector<int>& members(int c) const { return members_[c - fine_]; }
+  int lights() const { return lights_; }
+  const Vec3d& normal(int c) const { return normals_[c]; }
+  const float* diffuse(int c) const {
+    return diffuse_.data() + static_cast<std::size_t>(c) * lights_;
+  }
+  const float* specular(int c) const {
+    return specular_.data() + static_cast<std::size_t>(c) * lights_;
+  }
+  // Σ_j d², Σ_j d s, Σ_j s² over every light: the sums of a pixel with no saturated image.
+  double dd(int c) const { return sums_[3 * c]; }
+  double ds(int c) const { return sums_[3 * c + 1]; }
+  double ss(int c) const { return sums_[3 * c + 2]; }
+
+ private:
+  int lights_ = 0;
+  int fine_ = 0;
+  std::vector<Vec3d> normals_;
+  std::vector<std::vector<int>> members_;
+  std::vector<float> diffuse_, specular_;
+  std::vector<double> sums_;
+};
+
+struct SearchResult {
+  int candidate = -1;  // −1: no candidate explains anything (all observations unusable)
+  double cost = 0;     // censored cost at the winner
+  double kd = 0, ks = 0;
+};
+
+// One thread's search: buffers are reused from pixel to pixel.
+class NormalSearch {
+ public:
+  // With `ks_prior` (luminance), a free ks is pulled toward it with `prior_weight`
+  // (internal::NonNegativePair).
+  explicit NormalSearch(const CandidateTable& table, int refine = 16,
+                        std::optional<double> ks_prior = std::nullopt, double prior_weight = 0);
+  // y: K luminances; usable: K weights 0 (saturated) or 1; t: the censoring threshold;
+  // fixed_ks: the luminance ks when known, else nullptr. Only the lights where `usable` is 1
+  // count (a held-out fold sets the other half to 0).
+  SearchResult Search(const double* y, const double* usable, double t, const double* fixed_ks);
+
+ private:
+  // Refits candidate c's coefficients with the censoring weights of (kd, ks), in place, and
+  // returns the censored cost of the result.
+  double Refit(int c, double t, const double* fixed_ks, double* kd, double* ks);
+  // (kd, ks) from the weighted sums (internal::NonNegativePair, or kd alone for a fixed ks).
+  std::pair<double, double> Solve(double d, double x, double s, double a, double b,
+                                  const double* fixed_ks) const;
+  double Cost(int c, double t, double kd, double ks) const;
+  const CandidateTable& table_;
+  int refine_;
+  std::optional<double> ks_prior_;
+  double prior_weight_ = 0;
+  std::vector<float> y_, usable_, weight_;
+  std::vector<std::pair<double, int>> scores_;
+};
+
+}  // namespace iphong::solve

@@ -1,0 +1,109 @@
+#include "solve/woodham.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+
+#include "reflectance/material.h"
+
+namespace iphong::solve {
+
+using internal::PixelSolution;
+using internal::PixelStatus;
+
+Eigen::Matrix3Xd WoodhamPseudoInverse(const PhotometricData& data) {
+  Eigen::Matrix3Xd l(3, data.images);
+  for (int j = 0; j < data.images; ++j) l.col(j) = data.light_directions[j];
+  const Eigen::Matrix3d ata = l * l.transpose();
+  if (Eigen::LDLT<Eigen::Matrix3d>(ata).rcond() < 1e-9) return Eigen::Matrix3Xd();  // degenerate
+  return ata.inverse() * l;
+}
+
+PixelSolution Woodham(const PhotometricData& data, std::size_t p, const WoodhamSettings& o,
+                      const Eigen::Matrix3Xd& pinv, std::vector<std::pair<double, int>>& order,
+                      bool with_residual) {
+  const int k = data.images;
+  const float* obs = data.pixel(p);
+  order.clear();
+  double brightest = 0;
+  for (int j = 0; j < k; ++j) {
+    const Vec3d rgb(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]);
+    const double g =
+        internal::Luminance((rgb - o.ambient_term).cwiseQuotient(data.light_intensities[j]));
+    order.emplace_back(g, j);
+    brightest = std::max(brightest, g);
+  }
+  PixelSolution s;
+  if (!(brightest > 1e-8)) {
+    s.status = PixelStatus::kDark;
+    return s;
+  }
+  int first = static_cast<int>(std::floor(o.discard_dark * k));
+  int last = k - static_cast<int>(std::floor(o.discard_bright * k));
+  if (last - first < 3) {
+    first = 0;
+    last = k;
+  }
+  Vec3d b;
+  if (first == 0 && last == k && pinv.cols() == k) {
+    b = Vec3d::Zero();
+    for (int j = 0; j < k; ++j) b += pinv.col(order[j].second) * order[j].first;
+  } else {
+    // Only the two cut-offs matter, not the full order: two selections, O(K).
+    if (first > 0) std::nth_element(order.begin(), order.begin() + first, order.end());
+    if (last < k) std::nth_element(order.begin() + first, order.begin() + last, order.end());
+    Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+    Vec3d atb = Vec3d::Zero();
+    for (int i = first; i < last; ++i) {
+      const Vec3d& l = data.light_directions[order[i].second];
+      ata += l * l.transpose();
+      atb += l * order[i].first;
+    }
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(ata);
+    if (last - first < 3 || ldlt.rcond() < 1e-9) {
+      s.status = PixelStatus::kUnderdetermined;
+      return s;
+    }
+    b = ldlt.solve(atb);
+  }
+  if (!(b.norm() > 1e-12) || !b.allFinite()) {
+    s.status = PixelStatus::kDark;
+    return s;
+  }
+  s.normal = b.normalized();
+  // Per-channel albedo on the kept, lit observations.
+  Vec3d num = Vec3d::Zero(), den = Vec3d::Zero();
+  for (int i = first; i < last; ++i) {
+    const int j = order[i].second;
+    const double nl = s.normal.dot(data.light_directions[j]);
+    if (nl <= 0) continue;
+    const Vec3d rgb = (Vec3d(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]) - o.ambient_term)
+                          .cwiseQuotient(data.light_intensities[j]);
+    num += rgb * nl;
+    den += Vec3d::Constant(nl * nl);
+  }
+  s.albedo = num.cwiseQuotient(den.cwiseMax(1e-12)).cwiseMax(0.0);
+  if (!with_residual) return s;
+  // The residual of the Lambertian model Woodham fits, through the shared model.
+  reflectance::Material lambertian;
+  lambertian.kd = s.albedo;
+  reflectance::ModelOptions lambert;
+  lambert.lobe = reflectance::Lobe::kLambert;
+  double sq = 0;
+  int used = 0;
+  for (int i = first; i < last; ++i) {
+    const int j = order[i].second;
+    const Vec3d& e = data.light_intensities[j];
+    const Vec3d predicted =
+        o.ambient_term + reflectance::LightTerm<double>(s.normal, internal::ViewCam(),
+                                                        data.light_directions[j], e, e, lambertian,
+                                                        lambert);
+    sq += (Vec3d(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]) - predicted).squaredNorm();
+    used += 3;
+  }
+  s.residual = std::sqrt(sq / std::max(used, 1));
+  return s;
+}
+
+}  // namespace iphong::solve
