@@ -249,10 +249,10 @@ void RunDemo(const DemoOptions& options) {
       error / n, 1e3 * rendered.raster_seconds, 1e3 * rendered.shade_seconds);
   Say(options.common, "\nNormals recovered from the 12-image dataset (coefficients unknown):\n");
   Say(options.common,
-      "  Phong fit: mean %.3f deg, median %.3f deg; estimated ks = [%.3f %.3f %.3f], "
-      "shininess = %.1f (true [0.5 0.5 0.4], 10)\n",
-      phong_error.mean_deg, phong_error.median_deg, recovered.ks[0], recovered.ks[1],
-      recovered.ks[2], recovered.shininess);
+      "  model chosen by held-out prediction: %s, shininess %.1f, median ks [%.3f %.3f %.3f] "
+      "(true phong, 10, [0.5 0.5 0.4]); normals: mean %.3f deg, median %.3f deg\n",
+      reflectance::LobeName(recovered.model).c_str(), recovered.shininess, recovered.ks[0],
+      recovered.ks[1], recovered.ks[2], phong_error.mean_deg, phong_error.median_deg);
   Say(options.common, "  Woodham (Lambertian least squares): mean %.2f deg\n",
       woodham_error.mean_deg);
   Say(options.common, "\nHeights integrated from the recovered normals (%s, %.0f ms):\n",
