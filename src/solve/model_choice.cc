@@ -41,6 +41,7 @@ std::vector<ModelCandidate> ModelFamily(std::optional<reflectance::Lobe> only) {
 namespace {
 
 struct Sample {
+  std::size_t pixel = 0;
   std::vector<double> y, usable;  // K each
   double threshold = 0;
 };
@@ -116,6 +117,7 @@ std::vector<Sample> SamplePixels(const PhotometricData& data, const ModelChoiceS
   for (std::size_t p = stride / 2; p < pixels; p += stride) {
     if (!fitter.Prepare(p)) continue;
     Sample s;
+    s.pixel = p;
     s.y.assign(fitter.luminance(), fitter.luminance() + k);
     s.usable.assign(fitter.usable(), fitter.usable() + k);
     s.threshold = fitter.threshold();
@@ -158,19 +160,6 @@ Vec3d SharedSpecular(const PhotometricData& data, const ModelCandidate& model,
   const int k = data.images;
   std::vector<std::array<double, 3>> ks(sample.size(), {0, 0, 0});
   std::vector<int> ok(sample.size(), 0);
-  // Sample pixels were taken at the same stride: recover their indices for the RGB values.
-  const std::size_t pixels = data.pixel_count();
-  const std::size_t stride = std::max<std::size_t>(1, pixels / std::max(1, settings.sample));
-  std::vector<std::size_t> index;
-  {
-    PixelFitter fitter(data, settings.fit);
-    for (std::size_t p = stride / 2; p < pixels; p += stride) {
-      if (!fitter.Prepare(p)) continue;
-      int per_half[2] = {0, 0};
-      for (int j = 0; j < k; ++j) per_half[j % 2] += fitter.usable()[j] != 0;
-      if (per_half[0] >= 3 && per_half[1] >= 3) index.push_back(p);
-    }
-  }
   ParallelFor(0, sample.size(), 16, settings.threads, [&](std::size_t b, std::size_t e) {
     NormalSearch search(table);
     std::vector<reflectance::LightFactors<double>> f(k);
@@ -178,7 +167,7 @@ Vec3d SharedSpecular(const PhotometricData& data, const ModelCandidate& model,
       const Sample& s = sample[i];
       const SearchResult fit = search.Search(s.y.data(), s.usable.data(), s.threshold, nullptr);
       if (fit.candidate < 0) continue;
-      const float* obs = data.pixel(index[i]);
+      const float* obs = data.pixel(s.pixel);
       std::vector<double> w(k);
       for (int j = 0; j < k; ++j) {
         f[j] = {table.diffuse(fit.candidate)[j], table.specular(fit.candidate)[j]};
