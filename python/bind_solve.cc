@@ -128,6 +128,7 @@ void BindSolve(py::module_& m) {
                                  py::arg("heldout_cost") = c.heldout_cost));
         }
         out["model_scores"] = scores;
+        if (!result.model_map.pixels.empty()) out["model_map"] = ToArray(result.model_map);
         if (!result.ambiguity_deg.pixels.empty()) {
           out["ambiguity_deg"] = ToArray(result.ambiguity_deg);
         }
@@ -154,7 +155,8 @@ held-out prediction among Lambert, Phong and Blinn-Phong: model_scores lists eve
 "phong" or "blinn-phong" (that lobe, its shininess chosen) or "lambert" (Woodham); material: dict
 with ka, ks, shininess, ambient (and model) when the coefficients are known, else ks is
 estimated per pixel; shadow_threshold: observations darker than the model by more than this
-fraction of the pixel's brightness count as shadowed.
+fraction of the pixel's brightness count as shadowed. With the model chosen, model_map (H, W) says
+per pixel which won its own held-out test: 1 the specular model, 0 Lambert, -1 no normal.
 Returns normals (H, W, 3), albedo (H, W, 3), specular (H, W, 3: each pixel's ks; not for
 lambert), residual (H, W; -1 where no normal was found),
 the specular coefficients used or estimated, and a summary. With 1 or 2 images (material with

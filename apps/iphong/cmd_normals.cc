@@ -148,7 +148,14 @@ void RunNormals(const NormalsCommandOptions& o) {
                         {"heldout_error", m.heldout_error},
                         {"fold_angle_deg", m.fold_angle_deg}});
     }
+    std::size_t specular_pixels = 0, chosen_pixels = 0;
+    for (float v : result.model_map.pixels) {
+      specular_pixels += v == 1;
+      chosen_pixels += v >= 0;
+    }
     metrics["model_choice"] = {{"chosen", reflectance::LobeName(result.model)},
+                               {"pixels_choosing_it", specular_pixels},
+                               {"pixels_choosing_lambert", chosen_pixels - specular_pixels},
                                {"shininess", result.shininess},
                                {"pixels", result.model_choice.pixels},
                                {"scores", scores}};
@@ -186,6 +193,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   const bool specular_map = result.material_estimated && !result.specular.pixels.empty();
   if (specular_map) io::WriteImage(out.file("specular.exr"), result.specular);
   if (!ambiguity.pixels.empty()) io::WriteImage(out.file("ambiguity.exr"), ambiguity);
+  if (!result.model_map.pixels.empty()) io::WriteImage(out.file("model.exr"), result.model_map);
   if (result.material_estimated) {
     nlohmann::json material = {
         {"model", reflectance::LobeName(result.model)},
@@ -270,10 +278,11 @@ void RunNormals(const NormalsCommandOptions& o) {
         surface->consistency_mean_deg, surface->triangles);
   }
   Say(o.common,
-      "Wrote %s: normals.exr/.png, albedo.exr/.png, residual.exr/.png, metrics.json%s%s%s%s%s\n",
+      "Wrote %s: normals.exr/.png, albedo.exr/.png, residual.exr/.png, metrics.json%s%s%s%s%s%s\n",
       o.output_dir.c_str(), result.material_estimated ? ", material.json" : "",
       specular_map ? ", specular.exr" : "", errors ? ", error.png" : "",
       ambiguity.pixels.empty() ? "" : ", ambiguity.exr",
+      result.model_map.pixels.empty() ? "" : ", model.exr",
       surface ? ", height.exr, mesh.ply, height.png, integrate.json" : "");
 }
 

@@ -55,30 +55,19 @@ std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
   reflectance::ModelOptions model;
   model.lobe = m.lobe;
   const CandidateTable table(data.light_directions, model, m.shininess, settings.search_candidates);
-  const int k = data.images;
   std::vector<double> cost(sample.size(), 0.0), angle(sample.size(), 0.0);
   ParallelFor(0, sample.size(), 16, settings.threads, [&](std::size_t b, std::size_t e) {
     NormalSearch search(
         table, 16,
         m.ks_prior_weight > 0 ? std::optional(internal::Luminance(m.ks_prior)) : std::nullopt,
         m.ks_prior_weight);
-    std::vector<double> usable(k);
+    std::vector<double> buffer;
     for (std::size_t i = b; i < e; ++i) {
       const Sample& s = sample[i];
-      int chosen[2] = {-1, -1};
-      for (int half = 0; half < 2; ++half) {
-        for (int j = 0; j < k; ++j) usable[j] = fold[j] == half ? s.usable[j] : 0.0;
-        const SearchResult r = search.Search(s.y.data(), usable.data(), s.threshold, nullptr);
-        chosen[half] = r.candidate;
-        if (r.candidate < 0) continue;
-        const float* d = table.diffuse(r.candidate);
-        const float* sp = table.specular(r.candidate);
-        for (int j = 0; j < k; ++j) {
-          if (fold[j] == half || s.usable[j] == 0) continue;
-          cost[i] += internal::CensoredCost(s.y[j] - r.kd * d[j] - r.ks * sp[j], s.threshold) /
-                     (s.threshold * s.threshold);
-        }
-      }
+      const HeldOutResult r = HeldOutSearch(search, table, s.y.data(), s.usable.data(), fold.data(),
+                                            s.threshold, buffer);
+      cost[i] = r.cost;
+      const int chosen[2] = {r.candidate[0], r.candidate[1]};
       if (chosen[0] >= 0 && chosen[1] >= 0) {
         const double c = table.normal(chosen[0]).dot(table.normal(chosen[1]));
         angle[i] = std::acos(std::clamp(c, -1.0, 1.0)) * 180 / M_PI;
@@ -214,6 +203,7 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   for (int j = 0; j < k; ++j) fold[j] = j % 2;
   std::mt19937 rng(20261123);
   std::shuffle(fold.begin(), fold.end(), rng);
+  choice.fold = fold;
   const std::vector<Sample> sample = SamplePixels(data, settings, &fold);
   choice.pixels = sample.size();
   // The same pixels with the estimated ambient term subtracted, for the models that assume it.
@@ -241,39 +231,46 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
                          }) -
         choice.scored.begin());
   };
-  // Between the grid's factors of 2: one step of √2 each way (not wider than a highlight).
-  if (const ModelCandidate grid_best = choice.scored[lowest()];
-      grid_best.lobe != reflectance::Lobe::kLambert) {
-    for (double f : {std::sqrt(0.5), std::sqrt(2.0)}) {
-      ModelCandidate m = grid_best;
-      m.shininess *= f;
-      if (m.shininess < MinimumShininess(m.lobe)) continue;
+  // Each lobe's shininess refined from its own best grid point, so that the grid does not decide
+  // between two lobes that predict alike (Phong n and Blinn-Phong about 4n): one step of √2
+  // each way (not wider than a highlight), then a golden-section search of log n within √2 either
+  // side of the best of the three (five more evaluations: within 4%).
+  const std::size_t grid_size = choice.scored.size();
+  for (const reflectance::Lobe lobe : {reflectance::Lobe::kPhong, reflectance::Lobe::kBlinnPhong}) {
+    const auto best_of = [&](std::size_t end) {
+      std::optional<std::size_t> best;
+      for (std::size_t i = 0; i < end; ++i) {
+        if (choice.scored[i].lobe == lobe &&
+            (!best || choice.scored[i].heldout_cost < choice.scored[*best].heldout_cost)) {
+          best = i;
+        }
+      }
+      return best;
+    };
+    const std::optional<std::size_t> grid_best = best_of(grid_size);
+    if (!grid_best) continue;
+    const ModelCandidate start = choice.scored[*grid_best];
+    const auto evaluate = [&](double shininess) {
+      ModelCandidate m = start;
+      m.shininess = shininess;
       costs.push_back(held_out(m));
       choice.scored.push_back(m);
+      return m.heldout_cost;
+    };
+    for (double f : {std::sqrt(0.5), std::sqrt(2.0)}) {
+      if (start.shininess * f >= MinimumShininess(lobe)) evaluate(start.shininess * f);
     }
-    // Then a golden-section search of log n within √2 either side of the best of the three, so
-    // the shininess is not left on the grid (five more evaluations: within 4%).
-    const ModelCandidate centre = choice.scored[lowest()];
-    if (centre.lobe == grid_best.lobe) {
-      double lo =
-          std::log(std::max(centre.shininess / std::sqrt(2.0), MinimumShininess(centre.lobe)));
-      double hi = std::log(centre.shininess * std::sqrt(2.0));
-      const double g = (std::sqrt(5.0) - 1) / 2;
-      const auto evaluate = [&](double log_n) {
-        ModelCandidate m = centre;
-        m.shininess = std::exp(log_n);
-        costs.push_back(held_out(m));
-        choice.scored.push_back(m);
-        return m.heldout_cost;
-      };
-      double a = hi - g * (hi - lo), b = lo + g * (hi - lo);
-      double fa = evaluate(a), fb = evaluate(b);
-      for (int i = 0; i < 3; ++i) {
-        if (fa < fb) {
-          hi = b, b = a, fb = fa, a = hi - g * (hi - lo), fa = evaluate(a);
-        } else {
-          lo = a, a = b, fa = fb, b = lo + g * (hi - lo), fb = evaluate(b);
-        }
+    const double centre = choice.scored[*best_of(choice.scored.size())].shininess;
+    double lo = std::log(std::max(centre / std::sqrt(2.0), MinimumShininess(lobe)));
+    double hi = std::log(centre * std::sqrt(2.0));
+    const double g = (std::sqrt(5.0) - 1) / 2;
+    double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+    double f1 = evaluate(std::exp(x1)), f2 = evaluate(std::exp(x2));
+    for (int i = 0; i < 3; ++i) {
+      if (f1 < f2) {
+        hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = evaluate(std::exp(x1));
+      } else {
+        lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = evaluate(std::exp(x2));
       }
     }
   }

@@ -56,6 +56,7 @@ struct ModelChoice {
   ModelCandidate chosen;
   std::vector<ModelCandidate> scored;  // every model tried, in the order tried
   std::size_t pixels = 0;              // pixels scored
+  std::vector<int> fold;               // the half (0 or 1) of each light; empty when not tested
   std::string note;
 };
 

@@ -91,6 +91,7 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
   NormalResult result;
   result.summary.pixels = pixels;
   NormalOptions o = options;
+  std::vector<signed char> won;  // per_pixel_model: which model each pixel chose (1: specular)
 
   if (o.model == reflectance::Lobe::kLambert) {
     const auto start = Clock::now();
@@ -132,10 +133,31 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
     model.lobe = o.model;
     const CandidateTable table(data.light_directions, model, o.shininess, o.search_candidates);
     const WoodhamSettings woodham = WoodhamOf(o);
+    // The per-pixel choice between Lambert and the object's model, on the choice's halves.
+    const std::vector<int>& fold = result.model_choice.fold;
+    const bool per_pixel = !o.material_known && o.per_pixel_model &&
+                           o.model != reflectance::Lobe::kLambert && !fold.empty();
+    std::optional<CandidateTable> lambert_table;
+    PixelFitSettings lambert_fit = fit;
+    lambert_fit.model.lobe = reflectance::Lobe::kLambert;
+    lambert_fit.ks_prior.reset();
+    won.assign(per_pixel ? pixels : 0, -1);
+    if (per_pixel) {
+      reflectance::ModelOptions lambert;
+      lambert.lobe = reflectance::Lobe::kLambert;
+      lambert_table.emplace(data.light_directions, lambert, 1.0, o.search_candidates);
+    }
     std::atomic<std::size_t> done{0};
     std::atomic<long long> iterations{0};
     ParallelFor(0, pixels, 128, o.threads, [&](std::size_t b, std::size_t e) {
       PixelFitter fitter(data, fit);
+      std::optional<PixelFitter> lambert_fitter;
+      std::optional<NormalSearch> lambert_search;
+      if (per_pixel) {
+        lambert_fitter.emplace(data, lambert_fit);
+        lambert_search.emplace(*lambert_table);
+      }
+      std::vector<double> buffer;
       NormalSearch search(
           table, 16,
           fit.ks_prior ? std::optional(internal::Luminance(*fit.ks_prior)) : std::nullopt,
@@ -160,6 +182,26 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
         if (r.candidate < 0 || !(r.kd > 0 || r.ks > 0)) {
           s.status = PixelStatus::kDark;  // nothing lit under any normal
           continue;
+        }
+        if (per_pixel) {
+          // Each model searched on all lights, then on each half near that answer.
+          const SearchResult l = lambert_search->Search(fitter.luminance(), fitter.usable(),
+                                                        fitter.threshold(), nullptr);
+          const HeldOutResult lambert =
+              HeldOutSearch(*lambert_search, *lambert_table, fitter.luminance(), fitter.usable(),
+                            fold.data(), fitter.threshold(), buffer, true);
+          // The specular search above was the last full one of `search`.
+          const HeldOutResult specular =
+              HeldOutSearch(search, table, fitter.luminance(), fitter.usable(), fold.data(),
+                            fitter.threshold(), buffer, true);
+          won[p] = lambert.cost <= specular.cost && l.candidate >= 0 ? 0 : 1;
+          if (won[p] == 0) {
+            lambert_fitter->Prepare(p);
+            s.normal = lambert_table->normal(l.candidate);
+            lambert_fitter->Fit(s);
+            local += s.iterations;
+            continue;
+          }
         }
         s.normal = table.normal(r.candidate);
         fitter.Fit(s);
@@ -190,6 +232,14 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
                        result.model_choice.note + ")";
   }
 
+  if (!won.empty()) {
+    result.model_map = ImageF(data.width, data.height, 1, -1.0f);
+    for (std::size_t i = 0; i < pixels; ++i) {
+      if (solutions[i].status == PixelStatus::kSolved) {
+        result.model_map.pixels[static_cast<std::size_t>(data.pixels[i])] = won[i];
+      }
+    }
+  }
   result.normals = ImageF(data.width, data.height, 3);
   result.albedo = ImageF(data.width, data.height, 3);
   result.residual = ImageF(data.width, data.height, 1);

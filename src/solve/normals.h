@@ -47,6 +47,10 @@ struct NormalOptions {
   // the narrowest lobe the choice offers is wide.
   int search_candidates = 1000;
   int model_sample = 300;  // pixels the model choice scores
+  // Estimated coefficients: each pixel also chooses between Lambert and the object's specular
+  // model by its own held-out prediction (the same halves of the lights), so a region the
+  // specular model does not predict better — dark, or matte on a glossy object — is Lambertian.
+  bool per_pixel_model = true;
   // Fit the normal to all three channels (each with its own coefficients). Off: to their
   // luminance, exact under the model and about twice as fast, a little less accurate on photos.
   bool color_residuals = true;
@@ -92,6 +96,8 @@ struct NormalResult {
   bool specular_identifiable = true;  // false: the choice found no specular model predicts better
   std::string specular_note;
   ModelChoice model_choice;  // estimated coefficients: every model's held-out score
+  // per_pixel_model: 1 where the specular model won, 0 where Lambert did, −1 elsewhere.
+  ImageF model_map;
   // One or two images only: the angle the data alone leaves open per pixel (few_images.h).
   ImageF ambiguity_deg;
   NormalSummary summary;

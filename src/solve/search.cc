@@ -88,35 +88,37 @@ double NormalSearch::Cost(int c, double t, double kd, double ks) const {
   const int k = table_.lights();
   const VecF d(table_.diffuse(c), k), s(table_.specular(c), k), y(y_.data(), k),
       u(usable_.data(), k);
-  const Eigen::ArrayXf r = (y - static_cast<float>(kd) * d - static_cast<float>(ks) * s)
-                               .array()
-                               .max(static_cast<float>(-t));
-  return (r.square() * u.array()).sum();
+  // One fused expression: no temporary array per candidate.
+  return ((y.array() - static_cast<float>(kd) * d.array() - static_cast<float>(ks) * s.array())
+              .max(static_cast<float>(-t))
+              .square() *
+          u.array())
+      .sum();
 }
 
 double NormalSearch::Refit(int c, double t, const double* fixed_ks, double* kd, double* ks) {
   const int k = table_.lights();
-  const float* d = table_.diffuse(c);
-  const float* s = table_.specular(c);
-  double sd = 0, sx = 0, sss = 0, sa = 0, sb = 0;
-  for (int j = 0; j < k; ++j) {
-    if (usable_[j] == 0) continue;
-    const double r = y_[j] - *kd * d[j] - *ks * s[j];
-    if (internal::CensoredWeight(r, t) == 0) continue;
-    sd += d[j] * d[j];
-    sx += d[j] * s[j];
-    sss += s[j] * s[j];
-    sa += d[j] * y_[j];
-    sb += s[j] * y_[j];
-  }
-  const auto [new_kd, new_ks] = Solve(sd, sx, sss, sa, sb, fixed_ks);
+  const VecF d(table_.diffuse(c), k), s(table_.specular(c), k), y(y_.data(), k),
+      u(usable_.data(), k);
+  // The censoring's weights into the member buffers (no allocation per candidate).
+  weight_.resize(k);
+  Eigen::Map<Eigen::ArrayXf> w(weight_.data(), k);
+  w = ((y.array() - static_cast<float>(*kd) * d.array() - static_cast<float>(*ks) * s.array()) >=
+       static_cast<float>(-t))
+          .cast<float>() *
+      u.array();
+  const auto wd = w * d.array();
+  const auto ws = w * s.array();
+  const auto [new_kd, new_ks] =
+      Solve((wd * d.array()).sum(), (wd * s.array()).sum(), (ws * s.array()).sum(),
+            (wd * y.array()).sum(), (ws * y.array()).sum(), fixed_ks);
   *kd = new_kd;
   *ks = new_ks;
   return Cost(c, t, new_kd, new_ks);
 }
 
 SearchResult NormalSearch::Search(const double* y, const double* usable, double t,
-                                  const double* fixed_ks) {
+                                  const double* fixed_ks, bool near_last) {
   const int k = table_.lights();
   bool all_usable = true;
   for (int j = 0; j < k; ++j) {
@@ -135,28 +137,52 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
       sd = d.cwiseProduct(u).dot(d), sx = d.cwiseProduct(u).dot(s), sss = s.cwiseProduct(u).dot(s);
     }
     const auto [kd, ks] = Solve(sd, sx, sss, d.dot(yu), s.dot(yu), fixed_ks);
-    return std::pair<double, int>(Cost(c, t, kd, ks), c);
+    return Scored{Cost(c, t, kd, ks), c, kd, ks};
   };
   scores_.clear();
-  for (int c = table_.fine_count(); c < table_.size(); ++c) scores_.push_back(score(c));
-  const int coarse_top = std::min<int>(12, static_cast<int>(scores_.size()));
-  std::partial_sort(scores_.begin(), scores_.begin() + coarse_top, scores_.end());
-  for (int i = 0; i < coarse_top; ++i) {
-    for (int f : table_.members(scores_[i].second)) scores_.push_back(score(f));
+  if (!near_last) {
+    for (int c = table_.fine_count(); c < table_.size(); ++c) scores_.push_back(score(c));
+    const int coarse_top = std::min<int>(12, static_cast<int>(scores_.size()));
+    std::partial_sort(scores_.begin(), scores_.begin() + coarse_top, scores_.end());
+    last_coarse_.clear();
+    for (int i = 0; i < coarse_top; ++i) last_coarse_.push_back(scores_[i].candidate);
+  }
+  for (int c : last_coarse_) {
+    for (int f : table_.members(c)) scores_.push_back(score(f));
   }
   const int top = std::min<int>(refine_, static_cast<int>(scores_.size()));
   std::partial_sort(scores_.begin(), scores_.begin() + top, scores_.end());
   SearchResult best;
   best.cost = INFINITY;
   for (int i = 0; i < top; ++i) {
-    const int c = scores_[i].second;
-    double kd = 0, ks = 0;
-    // Start from the least-squares coefficients again (the screening kept only the cost).
-    double cost = Refit(c, INFINITY, fixed_ks, &kd, &ks);
+    const int c = scores_[i].candidate;
+    // From the screening's least-squares coefficients, two rounds of the censoring's weights.
+    double kd = scores_[i].kd, ks = scores_[i].ks, cost = 0;
     for (int round = 0; round < 2; ++round) cost = Refit(c, t, fixed_ks, &kd, &ks);
     if (cost < best.cost) best = {c, cost, kd, ks};
   }
   return best;
+}
+
+HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, const double* y,
+                            const double* usable, const int* fold, double t,
+                            std::vector<double>& buffer, bool near_last) {
+  const int k = table.lights();
+  buffer.resize(k);
+  HeldOutResult out;
+  for (int half = 0; half < 2; ++half) {
+    for (int j = 0; j < k; ++j) buffer[j] = fold[j] == half ? usable[j] : 0.0;
+    const SearchResult r = search.Search(y, buffer.data(), t, nullptr, near_last);
+    out.candidate[half] = r.candidate;
+    if (r.candidate < 0) continue;
+    const float* d = table.diffuse(r.candidate);
+    const float* s = table.specular(r.candidate);
+    for (int j = 0; j < k; ++j) {
+      if (fold[j] == half || usable[j] == 0) continue;
+      out.cost += internal::CensoredCost(y[j] - r.kd * d[j] - r.ks * s[j], t) / (t * t);
+    }
+  }
+  return out;
 }
 
 }  // namespace iphong::solve

@@ -74,8 +74,11 @@ class NormalSearch {
                         std::optional<double> ks_prior = std::nullopt, double prior_weight = 0);
   // y: K luminances; usable: K weights 0 (saturated) or 1; t: the censoring threshold;
   // fixed_ks: the luminance ks when known, else nullptr. Only the lights where `usable` is 1
-  // count (a held-out fold sets the other half to 0).
-  SearchResult Search(const double* y, const double* usable, double t, const double* fixed_ks);
+  // count (a held-out fold sets the other half to 0). `near_last`: only the fine directions near
+  // the last full search's best coarse ones (the same pixel's held-out halves, whose normals lie
+  // near the one all lights found), at a fifth of the cost.
+  SearchResult Search(const double* y, const double* usable, double t, const double* fixed_ks,
+                      bool near_last = false);
 
  private:
   // Refits candidate c's coefficients with the censoring weights of (kd, ks), in place, and
@@ -90,7 +93,26 @@ class NormalSearch {
   std::optional<double> ks_prior_;
   double prior_weight_ = 0;
   std::vector<float> y_, usable_, weight_;
-  std::vector<std::pair<double, int>> scores_;
+  struct Scored {
+    double cost;
+    int candidate;
+    double kd, ks;  // the least-squares coefficients the cost was taken at
+    bool operator<(const Scored& o) const { return cost < o.cost; }
+  };
+  std::vector<Scored> scores_;
+  std::vector<int> last_coarse_;
 };
+
+// One pixel's held-out cost under a model: searched on each half of the lights in turn
+// (fold[j] is 0 or 1) and charged the censored cost of the other half's usable observations, in
+// units of t², summed over both halves. candidate[h] is the normal half h chose (−1: none).
+struct HeldOutResult {
+  double cost = 0;
+  int candidate[2] = {-1, -1};
+};
+// `near_last`: the halves searched near the last full search of `search` (NormalSearch::Search).
+HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, const double* y,
+                            const double* usable, const int* fold, double t,
+                            std::vector<double>& buffer, bool near_last = false);
 
 }  // namespace iphong::solve

@@ -169,8 +169,8 @@ TEST(Normals, UnknownAmbientOfAnyStrength) {
     const NormalResult r = EstimateNormals(s.data, NormalOptions{});
     const double e = CompareNormals(r.normals, s.out.normal_cam, s.out.mask).mean_deg;
     table += " Ia " + std::to_string(ambient) + ": " + std::to_string(e) + " deg;";
-    // 0.06, 0.10, 0.56, 0.41: what remains is the chosen shininess's error, not the ambient.
-    EXPECT_LT(e, 0.75) << "ambient " << ambient;
+    // 0.07, 0.10, 0.25, 0.39: what remains is the chosen shininess's error, not the ambient.
+    EXPECT_LT(e, 0.5) << "ambient " << ambient;
     EXPECT_NEAR(r.ambient_term[0], 0.1 * ambient, 0.01) << "ambient " << ambient;
   }
   RecordProperty("ambient_table", table);
@@ -196,6 +196,38 @@ TEST(Normals, KsPerPixelFollowsTwoMaterials) {
     const double ratio = r.specular.pixels[3 * red_p + 1] / r.specular.pixels[3 * blue_p + 1];
     EXPECT_NEAR(ratio, 0.5 / 0.15, 0.3 * 0.5 / 0.15) << dx;  // 3.8 and 4.1 measured
   }
+}
+
+// A matte ball beside a glossy one: the object's model is specular, but each pixel keeps it only
+// where it predicts the pixel's own held-out lights better than Lambert.
+TEST(Normals, EachPixelKeepsTheSpecularModelOnlyWhereItPredictsBetter) {
+  reflectance::Material glossy, matte;
+  glossy.kd = matte.kd = Vec3d(0.5, 0.4, 0.3);
+  glossy.ks = Vec3d::Constant(0.5);
+  glossy.shininess = 20;
+  const Synthetic s = MakeTwoBallsData(glossy, matte);
+  const NormalResult r = EstimateNormals(s.data, NormalOptions{});
+  ASSERT_NE(r.model, reflectance::Lobe::kLambert);
+  ASSERT_EQ(r.model_map.width, 160);
+  // Counted over each ball's disc.
+  double specular[2] = {0, 0}, count[2] = {0, 0};
+  for (int y = 0; y < 80; ++y) {
+    for (int x = 0; x < 160; ++x) {
+      const float v = r.model_map.pixels[y * 160 + x];
+      if (v < 0) continue;
+      specular[x >= 80] += v;
+      count[x >= 80] += 1;
+    }
+  }
+  const double glossy_share = specular[0] / count[0], matte_share = specular[1] / count[1];
+  RecordProperty("glossy_share", std::to_string(glossy_share));
+  RecordProperty("matte_share", std::to_string(matte_share));
+  EXPECT_LT(matte_share, 0.2);
+  EXPECT_GT(glossy_share, 0.3);  // the lobe shows on part of the ball only
+  EXPECT_LT(CompareNormals(r.normals, s.out.normal_cam, s.out.mask).mean_deg, 0.3);
+  NormalOptions object_wide;
+  object_wide.per_pixel_model = false;
+  EXPECT_TRUE(EstimateNormals(s.data, object_wide).model_map.pixels.empty());
 }
 
 // Metallic: the highlight takes the surface colour. Found as it is, because each channel's ks is
