@@ -110,14 +110,27 @@ std::vector<Sample> SamplePixels(const PhotometricData& data, const ModelChoiceS
     s.y.assign(fitter.luminance(), fitter.luminance() + k);
     s.usable.assign(fitter.usable(), fitter.usable() + k);
     s.threshold = fitter.threshold();
-    int per_half[2] = {0, 0};
-    for (int j = 0; j < k; ++j) per_half[fold ? (*fold)[j] : j % 2] += s.usable[j] != 0;
-    if (per_half[0] >= 3 && per_half[1] >= 3) sample.push_back(std::move(s));
+    // Every fit (all lights outside one fold) needs 3 usable observations.
+    const int folds = fold ? 1 + *std::max_element(fold->begin(), fold->end()) : 2;
+    bool enough = true;
+    for (int f = 0; f < folds; ++f) {
+      int training = 0;
+      for (int j = 0; j < k; ++j) training += s.usable[j] != 0 && (fold ? (*fold)[j] : j % 2) != f;
+      enough = enough && training >= 3;
+    }
+    if (enough) sample.push_back(std::move(s));
   }
   return sample;
 }
 
 }  // namespace
+
+int FoldCount(int lights) {
+  if (lights - kMinTrainingLights <= 0) return lights;
+  const int f = static_cast<int>(
+      std::ceil(static_cast<double>(lights) / (lights - kMinTrainingLights) - 1e-9));
+  return std::clamp(f, 2, lights);
+}
 
 Vec3d EstimateAmbient(const PhotometricData& data) {
   const std::size_t pixels = data.pixel_count();
@@ -199,8 +212,12 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   }
   // Two halves of the lights, fixed for every model: a shuffled alternation, so that each half
   // covers the directions of the whole set.
+  // Folds of the lights, fixed for every model: each fit sees at least kMinTrainingLights
+  // lights (six per unknown of normal, kd and ks), or all but one — two halves for DiLiGenT's
+  // 96, leave-one-out for 24 or fewer. A shuffled alternation, so each fold spans the set.
+  const int folds = FoldCount(k);
   std::vector<int> fold(k);
-  for (int j = 0; j < k; ++j) fold[j] = j % 2;
+  for (int j = 0; j < k; ++j) fold[j] = j % folds;
   std::mt19937 rng(20261123);
   std::shuffle(fold.begin(), fold.end(), rng);
   choice.fold = fold;

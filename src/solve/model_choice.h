@@ -45,6 +45,12 @@ double MinimumShininess(reflectance::Lobe lobe);
 // (half widths 30° down to about 4°). With `only` set, that lobe's alone.
 std::vector<ModelCandidate> ModelFamily(std::optional<reflectance::Lobe> only);
 
+// Cross-validation folds over the lights: each fit sees at least this many (or all but one).
+constexpr int kMinTrainingLights = 24;
+// The number of folds for K lights: the fewest that leave kMinTrainingLights in each fit, at
+// least 2; K (leave-one-out) for K ≤ kMinTrainingLights.
+int FoldCount(int lights);
+
 struct ModelChoiceSettings {
   PixelFitSettings fit;  // saturation, shadow threshold and ambient term of the observations
   int sample = 300;      // pixels scored
@@ -56,7 +62,7 @@ struct ModelChoice {
   ModelCandidate chosen;
   std::vector<ModelCandidate> scored;  // every model tried, in the order tried
   std::size_t pixels = 0;              // pixels scored
-  std::vector<int> fold;               // the half (0 or 1) of each light; empty when not tested
+  std::vector<int> fold;               // each light's fold (FoldCount); empty when not tested
   std::string note;
 };
 

@@ -168,17 +168,19 @@ HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, c
                             const double* usable, const int* fold, double t,
                             std::vector<double>& buffer, bool near_last) {
   const int k = table.lights();
+  const int folds = 1 + *std::max_element(fold, fold + k);
   buffer.resize(k);
   HeldOutResult out;
-  for (int half = 0; half < 2; ++half) {
-    for (int j = 0; j < k; ++j) buffer[j] = fold[j] == half ? usable[j] : 0.0;
+  for (int f = 0; f < folds; ++f) {
+    // Fitted to every light but fold f's, charged for fold f's.
+    for (int j = 0; j < k; ++j) buffer[j] = fold[j] == f ? 0.0 : usable[j];
     const SearchResult r = search.Search(y, buffer.data(), t, nullptr, near_last);
-    out.candidate[half] = r.candidate;
+    if (f < 2) out.candidate[f] = r.candidate;
     if (r.candidate < 0) continue;
     const float* d = table.diffuse(r.candidate);
     const float* s = table.specular(r.candidate);
     for (int j = 0; j < k; ++j) {
-      if (fold[j] == half || usable[j] == 0) continue;
+      if (fold[j] != f || usable[j] == 0) continue;
       out.cost += internal::CensoredCost(y[j] - r.kd * d[j] - r.ks * s[j], t) / (t * t);
     }
   }

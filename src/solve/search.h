@@ -103,9 +103,10 @@ class NormalSearch {
   std::vector<int> last_coarse_;
 };
 
-// One pixel's held-out cost under a model: searched on each half of the lights in turn
-// (fold[j] is 0 or 1) and charged the censored cost of the other half's usable observations, in
-// units of t², summed over both halves. candidate[h] is the normal half h chose (−1: none).
+// One pixel's held-out cost under a model, by cross-validation over the lights: for each fold f
+// (fold[j] in 0 … F − 1) searched on the lights outside it and charged the censored cost of its
+// own usable observations, in units of t², summed over the folds. candidate[0] and candidate[1]
+// are the normals the first two fits chose (−1: none).
 struct HeldOutResult {
   double cost = 0;
   int candidate[2] = {-1, -1};
