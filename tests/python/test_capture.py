@@ -39,9 +39,11 @@ def test_uw_gray_reads_linear_and_linear_is_right():
         images = iphong.load_dataset(GRAY, encoding=encoding)["images"]
         result = iphong.estimate_normals(images, d["light_directions"], mask=d["mask"])
         errors[encoding] = iphong.angular_error(result["normals"], truth, d["mask"])
-    # Measured: linear 5.1° mean, 4.2° median; sRGB 16.4° and 16.5°.
+    # Measured: linear 6.16° mean, 4.37° median (5.1° and 4.2° before shadows were censored: on a
+    # convex sphere with no cast shadow, censoring only gives away the darker observations;
+    # plain least squares gives 5.46°); sRGB 16.4° and 16.5°.
     assert errors["linear"]["median_angular_error_deg"] <= 5.0
-    assert errors["linear"]["mean_angular_error_deg"] <= 6.0
+    assert errors["linear"]["mean_angular_error_deg"] <= 6.5
     assert errors["srgb"]["mean_angular_error_deg"] >= 12.0
 
 
