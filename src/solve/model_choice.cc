@@ -165,12 +165,12 @@ Vec3d SharedSpecular(const PhotometricData& data, const ModelCandidate& model,
   ParallelFor(0, sample.size(), 16, settings.threads, [&](std::size_t b, std::size_t e) {
     NormalSearch search(table);
     std::vector<reflectance::LightFactors<double>> f(k);
+    std::vector<double> w(k);
     for (std::size_t i = b; i < e; ++i) {
       const Sample& s = sample[i];
       const SearchResult fit = search.Search(s.y.data(), s.usable.data(), s.threshold, nullptr);
       if (fit.candidate < 0) continue;
       const float* obs = data.pixel(s.pixel);
-      std::vector<double> w(k);
       for (int j = 0; j < k; ++j) {
         f[j] = {table.diffuse(fit.candidate)[j], table.specular(fit.candidate)[j]};
         const double r = s.y[j] - fit.kd * f[j].diffuse - fit.ks * f[j].specular;
@@ -327,12 +327,16 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   }
   const ModelCandidate best = choice.scored[pick];
   choice.chosen = best;
+  const auto lambert = std::find_if(choice.scored.begin(), choice.scored.end(), [](const auto& m) {
+    return m.lobe == reflectance::Lobe::kLambert;
+  });
   char text[160];
-  std::snprintf(text, sizeof text, "held-out cost %.3g per pixel on %zu pixels, Lambert's %.3g",
-                best.heldout_cost, sample.size(), choice.scored.front().heldout_cost);
+  std::snprintf(text, sizeof text, "held-out cost %.3g per pixel on %zu pixels", best.heldout_cost,
+                sample.size());
   choice.note = text;
-  if (choice.scored.front().lobe != reflectance::Lobe::kLambert) {
-    choice.note = "held-out cost " + std::to_string(best.heldout_cost) + " per pixel";
+  if (lambert != choice.scored.end() && best.lobe != reflectance::Lobe::kLambert) {
+    std::snprintf(text, sizeof text, ", Lambert's %.3g", lambert->heldout_cost);
+    choice.note += text;
   }
   return choice;
 }
