@@ -8,6 +8,7 @@ namespace iphong::python {
 void BindReflectance(pybind11::module_& m);
 void BindRender(pybind11::module_& m);
 void BindSolve(pybind11::module_& m);
+void BindCalibrate(pybind11::module_& m);
 void BindIntegrate(pybind11::module_& m);
 void BindIo(pybind11::module_& m);
 

@@ -28,6 +28,7 @@ PYBIND11_MODULE(_core, m) {
   iphong::python::BindReflectance(m);
   iphong::python::BindRender(m);
   iphong::python::BindSolve(m);
+  iphong::python::BindCalibrate(m);
   iphong::python::BindIntegrate(m);
   iphong::python::BindIo(m);
 }

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
+#include "calibrate/lights.h"
 #include "core/timing.h"
 #include "integrate/integrate.h"
 #include "io/dataset.h"
@@ -32,6 +33,7 @@ struct NormalsCommandOptions {
   int irls_rounds = solve::NormalOptions{}.irls_rounds;
   bool fast = false;
   bool integrate = false;
+  bool estimate_intensities = false;
   CaptureFlags capture;
   CommonOptions common;
 };
@@ -113,8 +115,18 @@ void RunNormals(const NormalsCommandOptions& o) {
   auto fit_progress = std::make_shared<Progress>("fit", o.common.talk());
   options.progress = [fit_progress](double fraction) { fit_progress->Update(fraction); };
 
-  const solve::PhotometricData& data = loaded.observations;  // masked pixels only
   const double load_seconds = SecondsSince(total_start);
+  std::optional<calibrate::IntensityEstimate> estimated;
+  if (o.estimate_intensities) {
+    calibrate::IntensityOptions intensity_options;
+    intensity_options.threads = o.common.threads;
+    estimated = calibrate::EstimateIntensities(loaded.observations, intensity_options);
+    loaded.observations.light_intensities = estimated->light_intensities;
+    if (!estimated->note.empty()) Warn(o.dataset + ": estimating intensities: " + estimated->note);
+    Say(o.common, "Estimated the %d lights' intensities in %.2f s (eigenvalue gap %.1f)\n",
+        loaded.observations.images, estimated->seconds, estimated->eigen_gap);
+  }
+  const solve::PhotometricData& data = loaded.observations;  // masked pixels only
 
   // One or two images: the per-pixel problem is ambiguous and the library solves it globally
   // with priors, which needs the coefficients, kd included.
@@ -163,6 +175,11 @@ void RunNormals(const NormalsCommandOptions& o) {
   if (!ambiguity.pixels.empty()) {
     metrics["solver"] = "global (one or two images): data + smoothness + integrability + boundary";
   }
+  if (estimated) {
+    metrics["estimated_intensities"] = {{"seconds", estimated->seconds},
+                                        {"eigen_gap", estimated->eigen_gap},
+                                        {"note", estimated->note}};
+  }
   metrics["dark_pixels"] = result.summary.dark_pixels;
   metrics["underdetermined_pixels"] = result.summary.underdetermined_pixels;
   metrics["material"] = options.material_known                         ? "known (material.json)"
@@ -203,6 +220,15 @@ void RunNormals(const NormalsCommandOptions& o) {
         {"ka", {result.ambient_term[0], result.ambient_term[1], result.ambient_term[2]}},
         {"comment", "estimated by iphong normals: " + result.specular_note}};
     io::WriteTextFile(out.file("material.json"), material.dump(2) + "\n");
+  }
+  if (estimated) {
+    std::string text;
+    char line[96];
+    for (const Vec3d& e : estimated->light_intensities) {
+      std::snprintf(line, sizeof line, "%.6f %.6f %.6f\n", e.x(), e.y(), e.z());
+      text += line;
+    }
+    io::WriteTextFile(out.file("light_intensities.txt"), text);
   }
   if (errors)
     io::WriteErrorMap(out.file("error.png"), errors->error_deg, dataset.mask,
@@ -278,10 +304,11 @@ void RunNormals(const NormalsCommandOptions& o) {
         surface->consistency_mean_deg, surface->triangles);
   }
   Say(o.common,
-      "Wrote %s: normals.exr/.png, albedo.exr/.png, residual.exr/.png, metrics.json%s%s%s%s%s%s\n",
-      o.output_dir.c_str(), result.material_estimated ? ", material.json" : "",
-      specular_map ? ", specular.exr" : "", errors ? ", error.png" : "",
-      ambiguity.pixels.empty() ? "" : ", ambiguity.exr",
+      "Wrote %s: normals.exr/.png, albedo.exr/.png, residual.exr/.png, "
+      "metrics.json%s%s%s%s%s%s%s\n",
+      o.output_dir.c_str(), estimated ? ", light_intensities.txt" : "",
+      result.material_estimated ? ", material.json" : "", specular_map ? ", specular.exr" : "",
+      errors ? ", error.png" : "", ambiguity.pixels.empty() ? "" : ", ambiguity.exr",
       result.model_map.pixels.empty() ? "" : ", model.exr",
       surface ? ", height.exr, mesh.ply, height.png, integrate.json" : "");
 }
@@ -377,6 +404,10 @@ void AddNormalsCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--fast", o->fast,
                 "Fit normals to the luminance instead of all three channels (about 2x faster)");
+  cmd->add_flag("--estimate-intensities", o->estimate_intensities,
+                "Estimate each light's RGB intensity with the normals (semi-calibrated; the "
+                "intensity file is not used; written as light_intensities.txt, each channel's "
+                "mean 1)");
   cmd->add_flag("--integrate", o->integrate,
                 "Also integrate the normals: height.exr, mesh.ply (albedo colours), height.png");
   AddCaptureOptions(cmd, o->capture);

@@ -67,11 +67,13 @@ void AddMaterialsCommand(CLI::App& app);
 void AddRenderCommand(CLI::App& app);
 void AddNormalsCommand(CLI::App& app);  // normals and eval
 void AddIntegrateCommand(CLI::App& app);
+void AddCalibrateCommand(CLI::App& app);  // calibrate-lights
 
 // Every subcommand, in the order `iphong --help` lists them. New commands are added here only.
 inline void AddAllCommands(CLI::App& app) {
   AddDemoCommand(app);
   AddRenderCommand(app);
+  AddCalibrateCommand(app);
   AddNormalsCommand(app);
   AddIntegrateCommand(app);
   AddMaterialsCommand(app);

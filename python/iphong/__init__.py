@@ -147,6 +147,25 @@ material may be an iphong.Material (its kd, when not zero, is the known albedo) 
 
 
 @_short_type_errors
+def calibrate_lights(images, mask=None, circles=None, sphere="mirror", normals=None, *args,
+                     encoding=None, **kwargs):
+    images = _image_stack(images, len(images), encoding)
+    return _core.calibrate_lights(images, mask, circles, sphere, normals, *args, **kwargs)
+
+
+calibrate_lights.__doc__ = _core.calibrate_lights.__doc__
+
+
+@_short_type_errors
+def estimate_intensities(images, light_directions, mask=None, *args, encoding=None, **kwargs):
+    images = _image_stack(images, len(light_directions), encoding)
+    return _core.estimate_intensities(images, light_directions, mask, *args, **kwargs)
+
+
+estimate_intensities.__doc__ = _core.estimate_intensities.__doc__
+
+
+@_short_type_errors
 def angular_error(estimate, ground_truth, mask=None):
     """Angular error between two normal maps (H, W, 3) over the mask where the ground truth is
     non-zero: mean_angular_error_deg, median_angular_error_deg, fraction_below_{5,10,20}_deg,
@@ -260,6 +279,8 @@ __all__ = [
     "MaterialPreset",
     "PointLight",
     "angular_error",
+    "calibrate_lights",
+    "estimate_intensities",
     "estimate_normals",
     "height_to_mesh",
     "integrate",

@@ -18,6 +18,7 @@ using Vec3T = Eigen::Matrix<T, 3, 1>;
 using Vec3d = Vec3T<double>;
 using Vec3f = Vec3T<float>;
 using Rgb = Vec3d;  // linear, unclamped RGB triple
+using Vec2d = Eigen::Vector2d;
 
 // A float image: `channels` interleaved values per pixel, rows stored from the top row down.
 struct ImageF {

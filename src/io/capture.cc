@@ -231,9 +231,9 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
     const fs::path list = dir / "filenames.txt";
     c.names = ParseFilenames(ReadTextFile(list.string()), list.string());
     c.order = "filenames.txt";
-    if (light_file.empty()) light_file = dir / "light_directions.txt";
+    if (light_file.empty() && options.lights_needed) light_file = dir / "light_directions.txt";
   } else {
-    if (light_file.empty()) light_file = FindLightFile(dir, files);
+    if (light_file.empty() && options.lights_needed) light_file = FindLightFile(dir, files);
     fs::path list;
     for (const std::string& name :
          {Absolute(dir).filename().string() + ".txt", std::string("images.txt")})
@@ -262,7 +262,9 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
   // The light directions.
   c.lights_path = light_file.string();
   std::vector<std::string>* warnings = &c.warnings;
-  if (c.layout == "DiLiGenT" && options.lights.empty()) {
+  if (!options.lights_needed) {
+    c.lights_format = "none (not needed)";
+  } else if (c.layout == "DiLiGenT" && options.lights.empty()) {
     c.light_directions =
         ParseLightDirections(ReadTextFile(c.lights_path), c.lights_path, c.names.size(), warnings);
     c.lights_format = "directions";
@@ -295,10 +297,13 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
 
   // Intensities.
   fs::path intensities = options.intensities;
-  if (intensities.empty() && Exists(dir / "light_intensities.txt")) {
+  if (!options.lights_needed) {
+    c.light_intensities.assign(c.names.size(), Vec3d::Ones());
+    c.intensities_source = "not read (not needed)";
+  } else if (intensities.empty() && Exists(dir / "light_intensities.txt")) {
     intensities = dir / "light_intensities.txt";
   }
-  if (!intensities.empty()) {
+  if (options.lights_needed && !intensities.empty()) {
     c.light_intensities = ParseLightIntensities(ReadTextFile(intensities.string()),
                                                 intensities.string(), c.names.size());
     c.intensities_source = intensities.string();

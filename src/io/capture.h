@@ -34,6 +34,9 @@ struct CaptureOptions {
   std::string encoding = "auto";  // "auto" (what the files say, else linear), "linear", "srgb"
   PixelRect crop;                 // in the files' pixels, applied first; width 0 = none
   int downscale = 1;              // then area averaging by this factor
+  // False for captures whose lights are what is sought (calibrate-lights): no light file is
+  // looked for or read, light_directions stays empty and the intensities are all 1.
+  bool lights_needed = true;
 
   std::string Check() const;  // "" or what is wrong
 };

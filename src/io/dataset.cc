@@ -384,8 +384,10 @@ std::string DescribeDataset(const Dataset& d) {
   auto base = [](const std::string& path) { return fs::path(path).filename().string(); };
   std::string text = std::to_string(k) + " images (" + f.layout + " layout, " + f.order + ": " +
                      (k == 1 ? f.names[0] : f.names.front() + " ... " + f.names.back()) + ")";
-  text += "; lights " + f.lights_path + " (" + f.lights_format + ")";
-  text += "; intensities " + f.intensities_source;
+  if (!f.lights_path.empty()) {  // calibration reads no lights
+    text += "; lights " + f.lights_path + " (" + f.lights_format + ")";
+    text += "; intensities " + f.intensities_source;
+  }
   text +=
       "; mask " + (f.mask_path.empty() ? std::string("none (the whole image)") : base(f.mask_path));
   text += "; encoding " + std::string(d.encoding.encoding == Encoding::kSrgb ? "srgb" : "linear") +

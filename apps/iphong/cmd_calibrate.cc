@@ -1,0 +1,353 @@
+// `iphong calibrate-lights IMAGES -o DIR`: light directions (and intensities, and point-light
+// positions) from photos of a mirror sphere, a matte sphere or an object with known normals.
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "calibrate/lights.h"
+#include "core/timing.h"
+#include "io/calibration_picture.h"
+#include "io/dataset.h"
+#include "io/files.h"
+#include "io/image_io.h"
+#include "io/output_folder.h"
+#include "io/visualize.h"
+#include "iphong/commands.h"
+#include "iphong/console.h"
+
+namespace iphong::cli {
+namespace {
+
+struct CalibrateOptions {
+  std::string images;
+  std::string output_dir;
+  std::string sphere = "mirror";
+  std::string normals;             // a normal map: calibrate from known normals
+  std::vector<double> circles;     // cx, cy, r [, cx, cy, r]
+  std::vector<double> intrinsics;  // fx, fy, cx, cy
+  int max_spheres = 2;
+  double saturation = 1.0;
+  CaptureFlags capture;
+  CommonOptions common;
+};
+
+std::string Triples(const std::vector<Vec3d>& rows) {
+  std::string text;
+  char line[128];
+  for (const Vec3d& v : rows) {
+    std::snprintf(line, sizeof line, "%.6f %.6f %.6f\n", v.x(), v.y(), v.z());
+    text += line;
+  }
+  return text;
+}
+
+nlohmann::json Vector(const Vec3d& v) { return {v.x(), v.y(), v.z()}; }
+
+// The brightest value of every pixel over the images: each highlight shows in one picture.
+ImageF Brightest(const std::vector<ImageF>& images) {
+  ImageF out = images[0];
+  for (const ImageF& image : images)
+    for (std::size_t i = 0; i < out.pixels.size(); ++i)
+      out.pixels[i] = std::max(out.pixels[i], image.pixels[i]);
+  return out;
+}
+
+void RunCalibrate(const CalibrateOptions& o) {
+  const auto start = Clock::now();
+  RequireFolder(o.images);
+  if (o.circles.size() % 3 != 0) {
+    throw CLI::ValidationError("--circle", "takes cx,cy,r (one sphere) or six numbers (two)");
+  }
+  calibrate::Intrinsics camera;
+  if (!o.intrinsics.empty()) {
+    camera = {o.intrinsics[0], o.intrinsics[1], o.intrinsics[2], o.intrinsics[3]};
+    if (std::string m = camera.Check(); !m.empty()) throw CLI::ValidationError("--intrinsics", m);
+  }
+  const bool known_normals = !o.normals.empty();
+  if (known_normals && o.sphere != "mirror") {
+    throw CLI::ValidationError("--normals", "calibrates from the normal map; drop --sphere");
+  }
+  io::OutputFolderOptions folder;
+  folder.command = "calibrate-lights";
+  folder.overwrite = o.common.overwrite;
+  folder.inputs = {o.images, o.capture.options.mask, o.normals};
+  io::OutputFolder out(o.output_dir, folder);
+
+  io::DatasetLoadOptions load;
+  load.capture = o.capture.resolved();
+  load.capture.lights_needed = false;
+  load.load_ground_truth = false;
+  load.threads = o.common.threads;
+  load.memory = o.common.memory();
+  io::Dataset dataset;
+  {
+    Progress decode("decode", o.common.talk());
+    load.progress = [&decode](double fraction) { decode.Update(fraction); };
+    dataset = io::LoadDataset(o.images, load);
+  }
+  Say(o.common, "Read %s: %s\n", o.images.c_str(), io::DescribeDataset(dataset).c_str());
+  for (const std::string& warning : dataset.warnings) Warn(warning);
+  std::vector<const ImageF*> images;
+  for (const ImageF& image : dataset.images) images.push_back(&image);
+  const std::size_t k = images.size();
+  auto name = [&](int j) { return dataset.files.paths[j]; };
+
+  nlohmann::json report;
+  report["images"] = o.images;
+  report["method"] = known_normals ? "known normals" : o.sphere + " sphere";
+  report["camera"] = camera.perspective() ? nlohmann::json{{"fx", camera.fx},
+                                                           {"fy", camera.fy},
+                                                           {"cx", camera.cx},
+                                                           {"cy", camera.cy}}
+                                          : nlohmann::json("orthographic");
+  std::vector<Vec3d> directions, intensities, positions;
+  std::vector<calibrate::CalibrationNote> notes;
+  io::CalibrationPictureInput picture;
+  const ImageF brightest = Brightest(dataset.images);
+  picture.background = &brightest;
+  nlohmann::json per_image = nlohmann::json::array();
+  std::string intensity_source;
+
+  if (known_normals) {
+    Mask normal_mask;
+    ImageF normals = io::ReadNormalMap(o.normals, false, &normal_mask, o.common.memory());
+    if (normals.width != dataset.width() || normals.height != dataset.height()) {
+      throw std::runtime_error(o.normals + ": is " + SizeText(normals.width, normals.height) +
+                               ", the images are " + SizeText(dataset.width(), dataset.height()));
+    }
+    calibrate::KnownNormalOptions options;
+    options.saturation = o.saturation;
+    options.threads = o.common.threads;
+    const calibrate::KnownNormalCalibration c =
+        calibrate::CalibrateFromNormals(images, normals, dataset.mask, options);
+    directions = c.light_dir_cam;
+    intensities = c.light_intensities;
+    notes = c.warnings;
+    intensity_source = "measured (relative; each channel's mean is 1)";
+    report["rounds"] = c.rounds;
+    report["converged"] = c.converged;
+    report["seconds"] = c.seconds;
+    for (std::size_t j = 0; j < k; ++j) {
+      per_image.push_back({{"file", dataset.filenames[j]},
+                           {"light_direction", Vector(directions[j])},
+                           {"intensity", Vector(intensities[j])},
+                           {"relative_residual", c.residual[j]},
+                           {"pixels_used", c.pixels_used[j]}});
+    }
+  } else {
+    std::vector<calibrate::SphereOutline> outlines;
+    std::vector<std::string> sphere_warnings;
+    if (!o.circles.empty()) {
+      for (std::size_t i = 0; i < o.circles.size(); i += 3) {
+        calibrate::SphereOutline s;
+        s.center_x_px = o.circles[i];
+        s.center_y_px = o.circles[i + 1];
+        s.radius_px = o.circles[i + 2];
+        if (!(s.radius_px > 0)) throw CLI::ValidationError("--circle", "the radius must be > 0");
+        outlines.push_back(s);
+      }
+    } else {
+      if (dataset.files.mask_path.empty()) {
+        throw std::runtime_error(o.images +
+                                 ": no sphere mask (mask.png, NAME.mask.*): give --mask or "
+                                 "--circle cx,cy,r");
+      }
+      calibrate::SphereSearch search;
+      search.max_spheres = o.max_spheres;
+      try {
+        outlines = calibrate::FindSpheres(dataset.mask, search, &sphere_warnings);
+      } catch (const std::invalid_argument& e) {
+        throw std::runtime_error(dataset.files.mask_path + ": " + e.what());
+      }
+    }
+    for (const std::string& w : sphere_warnings) Warn(dataset.files.mask_path + ": " + w);
+    std::vector<calibrate::SphereGeometry> spheres;
+    for (const calibrate::SphereOutline& s : outlines) {
+      spheres.push_back(calibrate::SphereFromOutline(s, camera));
+      picture.circles.emplace_back(s.center_x_px, s.center_y_px, s.radius_px);
+    }
+    nlohmann::json sphere_json = nlohmann::json::array();
+    for (const calibrate::SphereGeometry& s : spheres) {
+      sphere_json.push_back({{"center_px", {s.outline.center_x_px, s.outline.center_y_px}},
+                             {"radius_px", s.outline.radius_px},
+                             {"outline_rms_px", s.outline.fit_rms_px},
+                             {"visible_fraction", s.outline.visible_fraction},
+                             {"center_cam", Vector(s.center_cam)},
+                             {"radius", s.radius}});
+    }
+    report["spheres"] = sphere_json;
+    if (o.sphere == "mirror") {
+      calibrate::MirrorOptions options;
+      options.saturation = o.saturation;
+      options.threads = o.common.threads;
+      const calibrate::MirrorCalibration c = calibrate::CalibrateMirror(images, spheres, options);
+      if (!c.failed.empty()) {
+        std::string list;
+        for (std::size_t i = 0; i < c.failed.size() && i < 3; ++i) {
+          for (const calibrate::Highlight& h : c.highlights[c.failed[i]])
+            if (!h.found) list += (list.empty() ? "" : "; ") + name(c.failed[i]) + ": " + h.problem;
+        }
+        if (c.failed.size() > 3) list += " (and " + std::to_string(c.failed.size() - 3) + " more)";
+        throw std::runtime_error(list);
+      }
+      directions = c.light_dir_cam;
+      intensities = c.light_intensities;
+      positions = c.light_position_cam;
+      notes = c.warnings;
+      intensity_source =
+          c.intensities_measured ? "measured from the highlights' energy" : "not measured (all 1)";
+      if (!c.positions_note.empty() && spheres.size() == 2) Warn(c.positions_note);
+      report["seconds"] = c.seconds;
+      for (std::size_t j = 0; j < k; ++j) {
+        nlohmann::json found = nlohmann::json::array();
+        picture.marks.emplace_back();
+        for (const calibrate::Highlight& h : c.highlights[j]) {
+          found.push_back({{"center_px", {h.x_px, h.y_px}},
+                           {"uncertainty_px", h.uncertainty_px},
+                           {"uncertainty_deg", h.uncertainty_deg},
+                           {"spread_deg", h.spread_deg},
+                           {"pixels", h.pixels},
+                           {"saturated_pixels", h.saturated_pixels},
+                           {"highlights", h.blobs},
+                           {"light_direction", Vector(h.light_dir_cam)}});
+          picture.marks.back().emplace_back(h.x_px, h.y_px);
+        }
+        nlohmann::json entry = {{"file", dataset.filenames[j]},
+                                {"light_direction", Vector(directions[j])},
+                                {"intensity", Vector(intensities[j])},
+                                {"highlights", found}};
+        if (!positions.empty()) {
+          entry["light_position"] = Vector(positions[j]);
+          entry["triangulation_gap"] = c.triangulation_gap[j];
+        }
+        per_image.push_back(entry);
+      }
+    } else {  // matte sphere: known normals from the fitted sphere, one albedo
+      ImageF normals(dataset.width(), dataset.height(), 3, 0.f);
+      Mask on_sphere(dataset.width(), dataset.height(), false);
+      for (const calibrate::SphereGeometry& s : spheres) {
+        for (int r = 0; r < normals.height; ++r) {
+          for (int col = 0; col < normals.width; ++col) {
+            // At least a pixel inside the outline: rim pixels mix in the background.
+            const double dx = col + 0.5 - s.outline.center_x_px;
+            const double dy = r + 0.5 - s.outline.center_y_px;
+            if (std::hypot(dx, dy) > s.outline.radius_px - 1) continue;
+            Vec3d n, v, p;
+            if (!s.At(col + 0.5, r + 0.5, &n, &v, &p)) continue;
+            std::copy(n.data(), n.data() + 3, normals.at(col, r));
+            on_sphere.inside[std::size_t(r) * normals.width + col] = 1;
+          }
+        }
+      }
+      calibrate::KnownNormalOptions options;
+      options.uniform_albedo = true;
+      options.saturation = o.saturation;
+      options.threads = o.common.threads;
+      const calibrate::KnownNormalCalibration c =
+          calibrate::CalibrateFromNormals(images, normals, on_sphere, options);
+      directions = c.light_dir_cam;
+      intensities = c.light_intensities;
+      notes = c.warnings;
+      intensity_source = "measured (relative; each channel's mean is 1)";
+      report["rounds"] = c.rounds;
+      report["converged"] = c.converged;
+      report["seconds"] = c.seconds;
+      for (std::size_t j = 0; j < k; ++j) {
+        per_image.push_back({{"file", dataset.filenames[j]},
+                             {"light_direction", Vector(directions[j])},
+                             {"intensity", Vector(intensities[j])},
+                             {"relative_residual", c.residual[j]},
+                             {"pixels_used", c.pixels_used[j]}});
+      }
+    }
+  }
+
+  nlohmann::json warnings = nlohmann::json::array();
+  for (const calibrate::CalibrationNote& n : notes) {
+    std::string line = n.image < 0 ? o.images : name(n.image);
+    if (n.other >= 0) line += " and " + dataset.filenames[n.other];
+    line += ": " + n.text;
+    Warn(line);
+    warnings.push_back(line);
+  }
+  report["warnings"] = warnings;
+  report["intensities"] = intensity_source;
+  report["per_image"] = per_image;
+  picture.light_dir_cam = directions;
+
+  io::WriteTextFile(out.file("light_directions.txt"), Triples(directions));
+  io::WriteTextFile(out.file("light_intensities.txt"), Triples(intensities));
+  if (!positions.empty()) io::WriteTextFile(out.file("light_positions.txt"), Triples(positions));
+  std::string lp = std::to_string(k) + "\n";
+  for (std::size_t j = 0; j < k; ++j) {
+    char line[64];
+    std::snprintf(line, sizeof line, " %.6f %.6f %.6f\n", directions[j].x(), directions[j].y(),
+                  directions[j].z());
+    lp += dataset.filenames[j] + line;
+  }
+  io::WriteTextFile(out.file("lights.lp"), lp);
+  io::WriteImage(out.file("calibration.png"), io::CalibrationPicture(picture));
+  report["total_seconds"] = SecondsSince(start);
+  io::WriteTextFile(out.file("calibration.json"), report.dump(2) + "\n");
+  out.Commit();
+  PrintJson(o.common, report.dump(2));
+  Say(o.common, "Calibrated %zu lights (%s; intensities %s) in %.2f s\n", k,
+      report["method"].get<std::string>().c_str(), intensity_source.c_str(), SecondsSince(start));
+  Say(o.common,
+      "Wrote %s: light_directions.txt, light_intensities.txt, lights.lp%s, calibration.json, "
+      "calibration.png\n",
+      o.output_dir.c_str(), positions.empty() ? "" : ", light_positions.txt");
+}
+
+}  // namespace
+
+void AddCalibrateCommand(CLI::App& app) {
+  auto o = std::make_shared<CalibrateOptions>();
+  auto* cmd = app.add_subcommand(
+      "calibrate-lights",
+      "Light directions and intensities from photos of a mirror or matte sphere, or of an object "
+      "with known normals");
+  cmd->add_option("images", o->images,
+                  "Folder of the calibration photos, one per light (a list file, or natural order)")
+      ->required();
+  cmd->add_option("-o,--output", o->output_dir,
+                  "Output folder: new or empty, or an earlier calibrate-lights output with "
+                  "--overwrite")
+      ->required();
+  cmd->add_option("--sphere", o->sphere,
+                  "What the photos show: a mirror sphere (the highlights give the directions) or "
+                  "a matte one (the shading gives directions and intensities)")
+      ->check(CLI::IsMember({"mirror", "matte"}))
+      ->capture_default_str();
+  cmd->add_option("--normals", o->normals,
+                  "Known normals of what the photos show (Normal_gt.mat, EXR, PNG): calibrate "
+                  "from its shading (directions and intensities) instead of a sphere");
+  cmd->add_option("--circle", o->circles,
+                  "The sphere's circle in pixels, cx,cy,r (six numbers for two spheres) instead "
+                  "of fitting one to the mask")
+      ->delimiter(',');
+  cmd->add_option("--intrinsics", o->intrinsics,
+                  "Perspective camera fx,fy,cx,cy in pixels (default: orthographic)")
+      ->delimiter(',')
+      ->expected(4);
+  cmd->add_option("--spheres", o->max_spheres, "Most spheres to look for in the mask")
+      ->check(CLI::Range(1, 2))
+      ->capture_default_str();
+  cmd->add_option("--saturation", o->saturation,
+                  "Values at or above this are clipped (images read as 0-1)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--mask", o->capture.options.mask,
+                  "Mask picture of the sphere(s) or object (default: mask.png, mask.*, "
+                  "NAME.mask.*, NAME_mask.*)");
+  cmd->add_option("--encoding", o->capture.options.encoding,
+                  "How the image values are encoded: auto, linear, srgb")
+      ->check(CLI::IsMember({"auto", "linear", "srgb"}))
+      ->capture_default_str();
+  AddOverwriteOption(cmd, o->common);
+  AddThreadsOption(cmd, o->common);
+  AddMemoryOption(cmd, o->common);
+  AddReportOptions(cmd, o->common);
+  cmd->callback([o] { RunCalibrate(*o); });
+}
+
+}  // namespace iphong::cli

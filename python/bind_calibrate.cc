@@ -1,0 +1,265 @@
+// Python view of src/calibrate: light calibration and semi-calibrated intensities.
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include "arrays.h"
+#include "bindings.h"
+#include "calibrate/lights.h"
+
+namespace py = pybind11;
+
+namespace iphong::python {
+namespace {
+
+using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+
+// (K, H, W, 3) float images, as ImageF (copies: the calibrations read them whole).
+std::vector<ImageF> ToImages(const py::object& value) {
+  FloatArray a = FloatArray::ensure(value);
+  if (!a || a.ndim() != 4 || a.shape(3) != 3) {
+    throw std::invalid_argument("images must have shape (K, H, W, 3)");
+  }
+  const int k = int(a.shape(0)), h = int(a.shape(1)), w = int(a.shape(2));
+  if (k < 1 || h < 1 || w < 1) throw std::invalid_argument("images: empty array");
+  std::vector<ImageF> images(k, ImageF(w, h, 3));
+  for (int j = 0; j < k; ++j) {
+    std::copy(a.data() + std::size_t(j) * h * w * 3, a.data() + std::size_t(j + 1) * h * w * 3,
+              images[j].pixels.begin());
+  }
+  return images;
+}
+
+py::dict HighlightDict(const calibrate::Highlight& h) {
+  py::dict d;
+  d["found"] = h.found;
+  d["problem"] = h.problem;
+  d["center_px"] = py::make_tuple(h.x_px, h.y_px);
+  d["light_direction"] = h.light_dir_cam;
+  d["uncertainty_deg"] = h.uncertainty_deg;
+  d["uncertainty_px"] = h.uncertainty_px;
+  d["spread_deg"] = h.spread_deg;
+  d["pixels"] = h.pixels;
+  d["saturated_pixels"] = h.saturated_pixels;
+  d["highlights"] = h.blobs;
+  return d;
+}
+
+py::list Notes(const std::vector<calibrate::CalibrationNote>& notes) {
+  py::list out;
+  for (const calibrate::CalibrationNote& n : notes) {
+    std::string where = n.image < 0 ? "" : "image " + std::to_string(n.image);
+    if (n.other >= 0) where += " and image " + std::to_string(n.other);
+    out.append(where.empty() ? n.text : where + ": " + n.text);
+  }
+  return out;
+}
+
+}  // namespace
+
+void BindCalibrate(py::module_& m) {
+  m.def(
+      "calibrate_lights",
+      [](const py::object& images_in, const py::object& mask_in, const py::object& circles,
+         const std::string& sphere, const py::object& normals_in, const py::object& intrinsics,
+         double saturation, int max_spheres, int threads) {
+        const std::vector<ImageF> images = ToImages(images_in);
+        std::vector<const ImageF*> pointers;
+        for (const ImageF& image : images) pointers.push_back(&image);
+        const int w = images[0].width, h = images[0].height;
+        const Mask mask = ToMask(mask_in, w, h);
+        py::dict out;
+        if (!normals_in.is_none()) {
+          const ImageF normals = ToImage(normals_in, "normals");
+          if (normals.width != w || normals.height != h || normals.channels != 3) {
+            throw std::invalid_argument("normals must have shape (H, W, 3) like the images");
+          }
+          calibrate::KnownNormalOptions options;
+          options.saturation = saturation;
+          options.threads = threads;
+          calibrate::KnownNormalCalibration c;
+          {
+            py::gil_scoped_release release;
+            c = calibrate::CalibrateFromNormals(pointers, normals, mask, options);
+          }
+          out["light_directions"] = ToArray(c.light_dir_cam);
+          out["light_intensities"] = ToArray(c.light_intensities);
+          out["residual"] = c.residual;
+          out["pixels_used"] = c.pixels_used;
+          out["warnings"] = Notes(c.warnings);
+          out["seconds"] = c.seconds;
+          return out;
+        }
+        if (sphere != "mirror" && sphere != "matte") {
+          throw std::invalid_argument("sphere must be 'mirror' or 'matte' (got '" + sphere + "')");
+        }
+        calibrate::Intrinsics camera;
+        if (!intrinsics.is_none()) {
+          const std::vector<double> v = ToNumbers(intrinsics, 4, "intrinsics");
+          camera = {v[0], v[1], v[2], v[3]};
+          if (std::string e = camera.Check(); !e.empty()) throw std::invalid_argument(e);
+        }
+        std::vector<calibrate::SphereOutline> outlines;
+        std::vector<std::string> sphere_warnings;
+        if (!circles.is_none()) {
+          auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(circles);
+          if (!a) PyErr_Clear();
+          if (!a || a.ndim() != 2 || a.shape(1) != 3 || a.shape(0) < 1 || a.shape(0) > 2) {
+            throw std::invalid_argument("circles must have shape (1, 3) or (2, 3): (cx, cy, r)");
+          }
+          const std::vector<Vec3d> rows = ToRows(circles, a.shape(0), "circles");
+          for (const Vec3d& c : rows) {
+            if (!(c.z() > 0)) throw std::invalid_argument("circles: a radius must be > 0");
+            calibrate::SphereOutline s;
+            s.center_x_px = c.x();
+            s.center_y_px = c.y();
+            s.radius_px = c.z();
+            outlines.push_back(s);
+          }
+        } else {
+          if (mask_in.is_none()) {
+            throw std::invalid_argument("give mask (the sphere's) or circles [(cx, cy, r)]");
+          }
+          calibrate::SphereSearch search;
+          search.max_spheres = max_spheres;
+          outlines = calibrate::FindSpheres(mask, search, &sphere_warnings);
+        }
+        std::vector<calibrate::SphereGeometry> spheres;
+        py::list sphere_list;
+        for (const calibrate::SphereOutline& s : outlines) {
+          spheres.push_back(calibrate::SphereFromOutline(s, camera));
+          sphere_list.append(
+              py::dict(py::arg("center_px") = py::make_tuple(s.center_x_px, s.center_y_px),
+                       py::arg("radius_px") = s.radius_px, py::arg("outline_rms_px") = s.fit_rms_px,
+                       py::arg("visible_fraction") = s.visible_fraction));
+        }
+        out["spheres"] = sphere_list;
+        py::list warnings;
+        for (const std::string& s : sphere_warnings) warnings.append(s);
+        if (sphere == "mirror") {
+          calibrate::MirrorOptions options;
+          options.saturation = saturation;
+          options.threads = threads;
+          calibrate::MirrorCalibration c;
+          {
+            py::gil_scoped_release release;
+            c = calibrate::CalibrateMirror(pointers, spheres, options);
+          }
+          if (!c.failed.empty()) {
+            for (const calibrate::Highlight& hl : c.highlights[c.failed[0]])
+              if (!hl.found)
+                throw std::invalid_argument("image " + std::to_string(c.failed[0]) + ": " +
+                                            hl.problem);
+          }
+          out["light_directions"] = ToArray(c.light_dir_cam);
+          out["light_intensities"] = ToArray(c.light_intensities);
+          out["intensities_measured"] = c.intensities_measured;
+          out["light_positions"] = c.light_position_cam.empty()
+                                       ? py::object(py::none())
+                                       : py::object(ToArray(c.light_position_cam));
+          out["positions_note"] = c.positions_note;
+          py::list highlights;
+          for (const auto& row : c.highlights) {
+            py::list per_sphere;
+            for (const calibrate::Highlight& hl : row) per_sphere.append(HighlightDict(hl));
+            highlights.append(per_sphere);
+          }
+          out["highlights"] = highlights;
+          for (const auto& w : Notes(c.warnings)) warnings.append(w);
+          out["seconds"] = c.seconds;
+        } else {
+          ImageF normals(w, h, 3, 0.f);
+          Mask on_sphere(w, h, false);
+          for (const calibrate::SphereGeometry& s : spheres) {
+            for (int r = 0; r < h; ++r) {
+              for (int col = 0; col < w; ++col) {
+                const double dx = col + 0.5 - s.outline.center_x_px;
+                const double dy = r + 0.5 - s.outline.center_y_px;
+                if (std::hypot(dx, dy) > s.outline.radius_px - 1) continue;
+                Vec3d n, v, p;
+                if (!s.At(col + 0.5, r + 0.5, &n, &v, &p)) continue;
+                std::copy(n.data(), n.data() + 3, normals.at(col, r));
+                on_sphere.inside[std::size_t(r) * w + col] = 1;
+              }
+            }
+          }
+          calibrate::KnownNormalOptions options;
+          options.uniform_albedo = true;
+          options.saturation = saturation;
+          options.threads = threads;
+          calibrate::KnownNormalCalibration c;
+          {
+            py::gil_scoped_release release;
+            c = calibrate::CalibrateFromNormals(pointers, normals, on_sphere, options);
+          }
+          out["light_directions"] = ToArray(c.light_dir_cam);
+          out["light_intensities"] = ToArray(c.light_intensities);
+          out["residual"] = c.residual;
+          for (const auto& w : Notes(c.warnings)) warnings.append(w);
+          out["seconds"] = c.seconds;
+        }
+        out["warnings"] = warnings;
+        return out;
+      },
+      py::arg("images"), py::arg("mask") = py::none(), py::arg("circles") = py::none(),
+      py::arg("sphere") = "mirror", py::arg("normals") = py::none(),
+      py::arg("intrinsics") = py::none(), py::arg("saturation") = 1.0, py::arg("max_spheres") = 2,
+      py::arg("threads") = 0,
+      R"doc(Light directions (and intensities, positions) from calibration photos (see
+`iphong calibrate-lights`).
+
+images (K, H, W, 3) linear float. With normals (H, W, 3): calibrate from an object of known
+normals (mask: where to use them), by robust Lambertian least squares with a per-pixel albedo.
+Otherwise a sphere, found in mask (largest regions, up to max_spheres) or given as circles
+[(cx, cy, r), ...] in pixels; sphere "mirror" (the highlights; two spheres also triangulate
+point-light positions) or "matte" (the shading, one albedo). intrinsics (fx, fy, cx, cy) for a
+perspective camera. Returns light_directions (K, 3), light_intensities (K, 3; each channel's mean
+1, or all 1 when a mirror's highlights are clipped), warnings, and per method: spheres,
+highlights [image][sphere] (center_px, uncertainty_deg, spread_deg, ...), light_positions or
+None; residual and pixels_used per light. Raises ValueError when an image has no highlight.)doc");
+
+  m.def(
+      "estimate_intensities",
+      [](const py::object& images_in, const py::object& light_directions, const py::object& mask_in,
+         double discard_dark, double discard_bright, int threads) {
+        FloatArray images = FloatArray::ensure(images_in);
+        if (!images || images.ndim() != 4 || images.shape(3) != 3) {
+          throw std::invalid_argument("images must have shape (K, H, W, 3)");
+        }
+        const std::size_t k = images.shape(0);
+        const int h = int(images.shape(1)), w = int(images.shape(2));
+        std::vector<Vec3d> dirs = ToRows(light_directions, k, "light_directions");
+        for (Vec3d& d : dirs) {
+          if (!(d.norm() > 0) || !d.allFinite())
+            throw std::invalid_argument("zero or non-finite light direction");
+          d.normalize();
+        }
+        std::vector<const float*> pointers;
+        for (std::size_t j = 0; j < k; ++j) pointers.push_back(images.data() + j * h * w * 3);
+        const solve::PhotometricData data = solve::GatherObservations(
+            pointers, w, h, ToMask(mask_in, w, h), dirs, std::vector<Vec3d>(k, Vec3d::Ones()));
+        calibrate::IntensityOptions options;
+        options.discard_dark = discard_dark;
+        options.discard_bright = discard_bright;
+        options.threads = threads;
+        calibrate::IntensityEstimate e;
+        {
+          py::gil_scoped_release release;
+          e = calibrate::EstimateIntensities(data, options);
+        }
+        py::dict out;
+        out["light_intensities"] = ToArray(e.light_intensities);
+        out["eigen_gap"] = e.eigen_gap;
+        out["note"] = e.note;
+        out["seconds"] = e.seconds;
+        return out;
+      },
+      py::arg("images"), py::arg("light_directions"), py::arg("mask") = py::none(),
+      py::arg("discard_dark") = 0.3, py::arg("discard_bright") = 0.1, py::arg("threads") = 0,
+      R"doc(Each light's relative RGB intensity from images under known directions
+(semi-calibrated photometric stereo; `iphong normals --estimate-intensities`). Returns
+light_intensities (K, 3), each channel's mean 1, and eigen_gap (how well determined: the second
+smallest eigenvalue over the smallest).)doc");
+}
+
+}  // namespace iphong::python
