@@ -62,7 +62,7 @@ void BindCalibrate(py::module_& m) {
       "calibrate_lights",
       [](const py::object& images_in, const py::object& mask_in, const py::object& circles,
          const std::string& sphere, const py::object& normals_in, const py::object& intrinsics,
-         double saturation, int max_spheres, int threads) {
+         double saturation, int max_spheres, bool uniform_albedo, int threads) {
         const std::vector<ImageF> images = ToImages(images_in);
         std::vector<const ImageF*> pointers;
         for (const ImageF& image : images) pointers.push_back(&image);
@@ -76,6 +76,7 @@ void BindCalibrate(py::module_& m) {
           }
           calibrate::KnownNormalOptions options;
           options.saturation = saturation;
+          options.uniform_albedo = uniform_albedo;
           options.threads = threads;
           calibrate::KnownNormalCalibration c;
           {
@@ -86,6 +87,7 @@ void BindCalibrate(py::module_& m) {
           out["light_intensities"] = ToArray(c.light_intensities);
           out["residual"] = c.residual;
           out["pixels_used"] = c.pixels_used;
+          out["converged"] = c.converged;
           out["warnings"] = Notes(c.warnings);
           out["seconds"] = c.seconds;
           return out;
@@ -168,21 +170,8 @@ void BindCalibrate(py::module_& m) {
           for (const auto& w : Notes(c.warnings)) warnings.append(w);
           out["seconds"] = c.seconds;
         } else {
-          ImageF normals(w, h, 3, 0.f);
-          Mask on_sphere(w, h, false);
-          for (const calibrate::SphereGeometry& s : spheres) {
-            for (int r = 0; r < h; ++r) {
-              for (int col = 0; col < w; ++col) {
-                const double dx = col + 0.5 - s.outline.center_x_px;
-                const double dy = r + 0.5 - s.outline.center_y_px;
-                if (std::hypot(dx, dy) > s.outline.radius_px - 1) continue;
-                Vec3d n, v, p;
-                if (!s.At(col + 0.5, r + 0.5, &n, &v, &p)) continue;
-                std::copy(n.data(), n.data() + 3, normals.at(col, r));
-                on_sphere.inside[std::size_t(r) * w + col] = 1;
-              }
-            }
-          }
+          Mask on_sphere;
+          const ImageF normals = calibrate::SphereNormalMap(spheres, w, h, &on_sphere);
           calibrate::KnownNormalOptions options;
           options.uniform_albedo = true;
           options.saturation = saturation;
@@ -209,7 +198,8 @@ void BindCalibrate(py::module_& m) {
 `iphong calibrate-lights`).
 
 images (K, H, W, 3) linear float. With normals (H, W, 3): calibrate from an object of known
-normals (mask: where to use them), by robust Lambertian least squares with a per-pixel albedo.
+normals (mask: where to use them), by robust Lambertian least squares with a per-pixel albedo
+(one albedo with uniform_albedo=True: a painted target).
 Otherwise a sphere, found in mask (largest regions, up to max_spheres) or given as circles
 [(cx, cy, r), ...] in pixels; sphere "mirror" (the highlights; two spheres also triangulate
 point-light positions) or "matte" (the shading, one albedo). intrinsics (fx, fy, cx, cy) for a

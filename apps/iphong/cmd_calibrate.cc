@@ -26,6 +26,7 @@ struct CalibrateOptions {
   std::vector<double> intrinsics;  // fx, fy, cx, cy
   int max_spheres = 2;
   double saturation = 1.0;
+  bool uniform_albedo = false;
   CaptureFlags capture;
   CommonOptions common;
 };
@@ -116,6 +117,7 @@ void RunCalibrate(const CalibrateOptions& o) {
     }
     calibrate::KnownNormalOptions options;
     options.saturation = o.saturation;
+    options.uniform_albedo = o.uniform_albedo;
     options.threads = o.common.threads;
     const calibrate::KnownNormalCalibration c =
         calibrate::CalibrateFromNormals(images, normals, dataset.mask, options);
@@ -125,6 +127,7 @@ void RunCalibrate(const CalibrateOptions& o) {
     intensity_source = "measured (relative; each channel's mean is 1)";
     report["rounds"] = c.rounds;
     report["converged"] = c.converged;
+    report["last_move_deg"] = c.last_move_deg;
     report["seconds"] = c.seconds;
     for (std::size_t j = 0; j < k; ++j) {
       per_image.push_back({{"file", dataset.filenames[j]},
@@ -222,22 +225,9 @@ void RunCalibrate(const CalibrateOptions& o) {
         per_image.push_back(entry);
       }
     } else {  // matte sphere: known normals from the fitted sphere, one albedo
-      ImageF normals(dataset.width(), dataset.height(), 3, 0.f);
-      Mask on_sphere(dataset.width(), dataset.height(), false);
-      for (const calibrate::SphereGeometry& s : spheres) {
-        for (int r = 0; r < normals.height; ++r) {
-          for (int col = 0; col < normals.width; ++col) {
-            // At least a pixel inside the outline: rim pixels mix in the background.
-            const double dx = col + 0.5 - s.outline.center_x_px;
-            const double dy = r + 0.5 - s.outline.center_y_px;
-            if (std::hypot(dx, dy) > s.outline.radius_px - 1) continue;
-            Vec3d n, v, p;
-            if (!s.At(col + 0.5, r + 0.5, &n, &v, &p)) continue;
-            std::copy(n.data(), n.data() + 3, normals.at(col, r));
-            on_sphere.inside[std::size_t(r) * normals.width + col] = 1;
-          }
-        }
-      }
+      Mask on_sphere;
+      const ImageF normals =
+          calibrate::SphereNormalMap(spheres, dataset.width(), dataset.height(), &on_sphere);
       calibrate::KnownNormalOptions options;
       options.uniform_albedo = true;
       options.saturation = o.saturation;
@@ -250,6 +240,7 @@ void RunCalibrate(const CalibrateOptions& o) {
       intensity_source = "measured (relative; each channel's mean is 1)";
       report["rounds"] = c.rounds;
       report["converged"] = c.converged;
+      report["last_move_deg"] = c.last_move_deg;
       report["seconds"] = c.seconds;
       for (std::size_t j = 0; j < k; ++j) {
         per_image.push_back({{"file", dataset.filenames[j]},
@@ -321,6 +312,8 @@ void AddCalibrateCommand(CLI::App& app) {
   cmd->add_option("--normals", o->normals,
                   "Known normals of what the photos show (Normal_gt.mat, EXR, PNG): calibrate "
                   "from its shading (directions and intensities) instead of a sphere");
+  cmd->add_flag("--uniform-albedo", o->uniform_albedo,
+                "With --normals: the object has one albedo (a painted target), not one per pixel");
   cmd->add_option("--circle", o->circles,
                   "The sphere's circle in pixels, cx,cy,r (six numbers for two spheres) instead "
                   "of fitting one to the mask")

@@ -71,6 +71,12 @@ struct SphereGeometry {
 };
 SphereGeometry SphereFromOutline(const SphereOutline& outline, const Intrinsics& camera);
 
+// The spheres' unit normals per pixel (3 channels, 0 elsewhere) and where they are, leaving out
+// the pixels within a pixel of an outline, which mix in the background: what a matte sphere is
+// calibrated from.
+ImageF SphereNormalMap(const std::vector<SphereGeometry>& spheres, int width, int height,
+                       Mask* on_sphere);
+
 struct MirrorOptions {
   double threshold = 0.5;       // the highlight: pixels above this fraction of the sphere's peak
   double saturation = 1.0;      // values at or above are clipped
@@ -128,8 +134,8 @@ struct KnownNormalOptions {
   bool uniform_albedo = false;  // a calibration sphere: one albedo; else one per pixel
   double saturation = 1.0;      // observations at or above are clipped and left out
   double min_cos = 0.2;         // observations used only where N·L exceeds this (attached shadow)
-  int rounds = 30;              // alternations between albedo and lights
-  double tolerance = 1e-7;      // stop when no direction moves more than this (radians)
+  int rounds = 50;              // alternations between albedo and lights
+  double tolerance = 1e-5;      // stop when no direction moves more than this (radians, 0.0006°)
   int threads = 0;
   std::string Check() const;
 };
@@ -141,6 +147,9 @@ struct KnownNormalCalibration {
   std::vector<int> pixels_used;        // per light
   int rounds = 0;
   bool converged = false;
+  // The largest direction change in the last round. Alternation converges linearly: on
+  // DiLiGenT ball it still moves 0.002° a round after 50 rounds, about 0.04° in all.
+  double last_move_deg = 0;
   std::vector<CalibrationNote> warnings;
   double seconds = 0;
 };

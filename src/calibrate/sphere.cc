@@ -208,6 +208,25 @@ bool SphereGeometry::At(double x_px, double y_px, Vec3d* normal_cam, Vec3d* view
   return true;
 }
 
+ImageF SphereNormalMap(const std::vector<SphereGeometry>& spheres, int width, int height,
+                       Mask* on_sphere) {
+  ImageF normals(width, height, 3, 0.f);
+  *on_sphere = Mask(width, height, false);
+  for (const SphereGeometry& s : spheres) {
+    for (int r = 0; r < height; ++r) {
+      for (int c = 0; c < width; ++c) {
+        const double dx = c + 0.5 - s.outline.center_x_px, dy = r + 0.5 - s.outline.center_y_px;
+        if (std::hypot(dx, dy) > s.outline.radius_px - 1) continue;
+        Vec3d n, v, p;
+        if (!s.At(c + 0.5, r + 0.5, &n, &v, &p)) continue;
+        std::copy(n.data(), n.data() + 3, normals.at(c, r));
+        on_sphere->inside[std::size_t(r) * width + c] = 1;
+      }
+    }
+  }
+  return normals;
+}
+
 Vec2d SphereGeometry::Project(const Vec3d& p) const {
   if (!camera.perspective()) return Vec2d(p.x(), -p.y());
   return Vec2d(camera.cx + camera.fx * p.x() / -p.z(), camera.cy - camera.fy * p.y() / -p.z());

@@ -1,0 +1,183 @@
+"""`iphong calibrate-lights` on small mirror-sphere captures drawn here (8-bit PNG), and every bad
+capture of issue 13 with its exact report: no sphere, a sphere clipped by the edge, a missing
+highlight (an error: nothing written), a large clipped highlight, two images with the same light
+and a light behind the sphere (warnings: the calibration is written)."""
+import json
+import math
+import struct
+import zlib
+
+import pytest
+
+from cli import IPHONG, assert_one_line_error, binary_available, run, snapshot
+
+pytestmark = pytest.mark.skipif(not binary_available(), reason=f"no iphong binary at {IPHONG}")
+
+SIZE, CX, CY, RADIUS = 96, 48.0, 48.0, 40.0
+
+
+def png(width, height, rows, channels):
+    """An 8-bit PNG (channels 1 or 3) from rows of byte strings."""
+    def chunk(kind, data):
+        return (struct.pack(">I", len(data)) + kind + data
+                + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+    raw = b"".join(b"\0" + row for row in rows)
+    return (b"\x89PNG\r\n\x1a\n"
+            + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8,
+                                         0 if channels == 1 else 2, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+def unit(v):
+    n = math.sqrt(sum(x * x for x in v))
+    return [x / n for x in v]
+
+
+def mirror_image(light, half_width_deg=4.0, gain=0.8, cx=CX):
+    """A mirror ball under a small round source: a Gaussian highlight in directions, its peak
+    `gain` (above 1 the centre is clipped)."""
+    light = unit(light)
+    rows = []
+    for r in range(SIZE):
+        row = bytearray()
+        for c in range(SIZE):
+            dx, dy = (c + 0.5 - cx) / RADIUS, -(r + 0.5 - CY) / RADIUS
+            value = 0.0
+            if dx * dx + dy * dy < 1:
+                nz = math.sqrt(1 - dx * dx - dy * dy)
+                reflected = [2 * nz * dx, 2 * nz * dy, 2 * nz * nz - 1]
+                cos = max(-1.0, min(1.0, sum(a * b for a, b in zip(reflected, light))))
+                angle = math.degrees(math.acos(cos))
+                value = 0.02 + gain * math.exp(-0.5 * (angle / half_width_deg) ** 2)
+            row += bytes([min(255, round(255 * value))] * 3)
+        rows.append(bytes(row))
+    return png(SIZE, SIZE, rows, 3)
+
+
+def disc_mask(cx=CX, radius=RADIUS):
+    rows = [bytes(255 if (c + 0.5 - cx) ** 2 + (r + 0.5 - CY) ** 2 < radius ** 2 else 0
+                  for c in range(SIZE)) for r in range(SIZE)]
+    return png(SIZE, SIZE, rows, 1)
+
+
+LIGHTS = [(0.3, 0.2, 0.9), (-0.4, 0.3, 0.8), (0.1, -0.5, 0.8), (-0.2, -0.2, 0.95),
+          (0.6, -0.1, 0.7), (0.0, 0.6, 0.75)]
+
+
+def capture(folder, lights=LIGHTS, images=None, mask=True):
+    folder.mkdir()
+    for j, light in enumerate(lights):
+        data = images[j] if images and j in images else mirror_image(light)
+        (folder / f"ball.{j + 1}.png").write_bytes(data)
+    if mask:
+        (folder / "mask.png").write_bytes(disc_mask())
+    return folder
+
+
+def angle_deg(a, b):
+    a, b = unit(a), unit(b)
+    return math.degrees(math.acos(max(-1.0, min(1.0, sum(x * y for x, y in zip(a, b))))))
+
+
+def test_mirror_capture_gives_the_lights_the_files_and_the_picture(tmp_path):
+    folder = capture(tmp_path / "ball")
+    out = tmp_path / "lights"
+    code, stdout, err = run("calibrate-lights", folder, "-o", out)
+    assert code == 0, err
+    assert "Calibrated 6 lights (mirror sphere; intensities measured" in stdout
+    directions = [list(map(float, line.split()))
+                  for line in (out / "light_directions.txt").read_text().splitlines()]
+    # 8-bit values and a 40 px sphere: a pixel spans about 2.9 deg of directions.
+    for found, truth in zip(directions, LIGHTS):
+        assert angle_deg(found, truth) < 0.3, (found, truth)
+    intensities = (out / "light_intensities.txt").read_text().splitlines()
+    assert len(intensities) == 6
+    lp = (out / "lights.lp").read_text().splitlines()
+    assert lp[0] == "6" and lp[1].startswith("ball.1.png ")
+    report = json.loads((out / "calibration.json").read_text())
+    assert report["method"] == "mirror sphere"
+    assert abs(report["spheres"][0]["radius_px"] - RADIUS) < 0.2
+    assert [p["file"] for p in report["per_image"]] == [f"ball.{j}.png" for j in range(1, 7)]
+    # The reported uncertainty is honest: measured errors 0.07-0.15 deg, reported 0.31-0.33.
+    for entry, truth in zip(report["per_image"], LIGHTS):
+        highlight = entry["highlights"][0]
+        assert angle_deg(entry["light_direction"], truth) < highlight["uncertainty_deg"] < 0.4
+    assert (out / "calibration.png").stat().st_size > 1000
+    # The result feeds `iphong normals --lights` as any light file does.
+    assert not err
+
+
+def test_no_sphere_in_the_mask(tmp_path):
+    folder = capture(tmp_path / "ball", mask=False)
+    (folder / "mask.png").write_bytes(disc_mask(radius=3))  # a speck, not a sphere
+    before = snapshot(tmp_path)
+    code, _, err = run("calibrate-lights", folder, "-o", tmp_path / "out")
+    assert_one_line_error(code, err, 1,
+                          r"ball/mask\.png: no sphere: the mask has no region of radius 6\.0 px "
+                          r"or more$")
+    assert snapshot(tmp_path) == before
+
+
+def test_no_mask_and_no_circle(tmp_path):
+    folder = capture(tmp_path / "ball", mask=False)
+    code, _, err = run("calibrate-lights", folder, "-o", tmp_path / "out")
+    assert_one_line_error(code, err, 1,
+                          r"ball: no sphere mask \(mask\.png, NAME\.mask\.\*\): give --mask or "
+                          r"--circle cx,cy,r$")
+    # The circle given by hand does the same job as the mask.
+    code, _, err = run("calibrate-lights", folder, "-o", tmp_path / "out",
+                       "--circle", f"{CX},{CY},{RADIUS}", "-q")
+    assert code == 0, err
+
+
+def test_sphere_clipped_by_the_image_edge(tmp_path):
+    folder = capture(tmp_path / "ball", mask=False)
+    (folder / "mask.png").write_bytes(disc_mask(cx=-12))
+    code, _, err = run("calibrate-lights", folder, "-o", tmp_path / "out")
+    assert_one_line_error(code, err, 1,
+                          r"mask\.png: the sphere at \(-1[12]\.\d, 48\.0\) is clipped by the image "
+                          r"edge \(\d+% of its outline visible\): too little to fit$")
+    assert not (tmp_path / "out").exists()
+
+
+def test_missing_highlight_is_an_error_naming_the_image(tmp_path):
+    black = png(SIZE, SIZE, [bytes(3 * SIZE)] * SIZE, 3)
+    folder = capture(tmp_path / "ball", images={3: black})
+    code, _, err = run("calibrate-lights", folder, "-o", tmp_path / "out")
+    assert_one_line_error(code, err, 1,
+                          r"ball\.4\.png: no highlight on the sphere at \(48, 48\): its brightest "
+                          r"pixel is black \(the light is behind the sphere or off, or the sphere "
+                          r"is not a mirror\)$")
+    assert not (tmp_path / "out").exists()
+
+
+def test_large_clipped_highlight_same_light_and_light_behind_are_warnings(tmp_path):
+    behind = (0.95, 0.0, -0.25)
+    lights = LIGHTS[:4] + [LIGHTS[0], behind]
+    images = {1: mirror_image(LIGHTS[1], half_width_deg=6, gain=4.0)}
+    folder = capture(tmp_path / "ball", lights=lights, images=images)
+    out = tmp_path / "lights"
+    code, _, err = run("calibrate-lights", folder, "-o", out)
+    assert code == 0, err
+    lines = err.splitlines()
+    assert any(line.startswith("iphong: warning: ") and "ball.2.png: the highlight is clipped "
+               "over a large blob" in line and "shorten the exposure" in line for line in lines), err
+    assert any("ball.1.png and ball.5.png: the same light (0.00 deg apart)" in line
+               for line in lines), err
+    assert any("ball.6.png: the light is behind the sphere's equator as the camera sees it" in line
+               for line in lines), err
+    assert any("highlights are clipped: intensities not measured (all 1 written)" in line
+               for line in lines), err
+    report = json.loads((out / "calibration.json").read_text())
+    assert len(report["warnings"]) == 4
+    directions = [list(map(float, line.split()))
+                  for line in (out / "light_directions.txt").read_text().splitlines()]
+    # 52 deg from the view on a 40 px sphere: the highlight is squeezed against the rim.
+    assert angle_deg(directions[5], behind) < 1.0
+    assert angle_deg(directions[1], LIGHTS[1]) < 0.5  # clipped, but still centred
+
+
+def test_circle_needs_three_or_six_numbers(tmp_path):
+    folder = capture(tmp_path / "ball")
+    code, _, err = run("calibrate-lights", folder, "-o", tmp_path / "out", "--circle", "1,2")
+    assert_one_line_error(code, err, 2, r"--circle: takes cx,cy,r \(one sphere\) or six numbers")
