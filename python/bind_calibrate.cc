@@ -193,7 +193,7 @@ void BindCalibrate(py::module_& m) {
       py::arg("images"), py::arg("mask") = py::none(), py::arg("circles") = py::none(),
       py::arg("sphere") = "mirror", py::arg("normals") = py::none(),
       py::arg("intrinsics") = py::none(), py::arg("saturation") = 1.0, py::arg("max_spheres") = 2,
-      py::arg("threads") = 0,
+      py::arg("uniform_albedo") = false, py::arg("threads") = 0,
       R"doc(Light directions (and intensities, positions) from calibration photos (see
 `iphong calibrate-lights`).
 
