@@ -4,16 +4,19 @@ highlight (an error: nothing written), a large clipped highlight, two images wit
 and a light behind the sphere (warnings: the calibration is written)."""
 import json
 import math
+import os
+import pathlib
 import struct
 import zlib
 
 import pytest
 
-from cli import IPHONG, assert_one_line_error, binary_available, run, snapshot
+from cli import IPHONG, ROOT, assert_one_line_error, binary_available, run, snapshot
 
 pytestmark = pytest.mark.skipif(not binary_available(), reason=f"no iphong binary at {IPHONG}")
 
 SIZE, CX, CY, RADIUS = 96, 48.0, 48.0, 40.0
+UW = pathlib.Path(os.environ.get("IPHONG_DATA_DIR", ROOT.parent / "shared" / "data")) / "uw"
 
 
 def png(width, height, rows, channels):
@@ -181,3 +184,18 @@ def test_circle_needs_three_or_six_numbers(tmp_path):
     folder = capture(tmp_path / "ball")
     code, _, err = run("calibrate-lights", folder, "-o", tmp_path / "out", "--circle", "1,2")
     assert_one_line_error(code, err, 2, r"--circle: takes cx,cy,r \(one sphere\) or six numbers")
+
+
+@pytest.mark.skipif(not (UW / "chrome").is_dir(), reason=f"UW data not found at {UW}")
+def test_uw_chrome_calibrates_the_lights_uw_cat_is_solved_with(tmp_path):
+    """The issue's done-when: calibrate from the chrome sphere, then solve the cat with it."""
+    code, stdout, err = run("calibrate-lights", UW / "chrome", "-o", tmp_path / "lights")
+    assert code == 0, err
+    for name in ["light_directions.txt", "light_intensities.txt", "lights.lp", "calibration.json",
+                 "calibration.png"]:
+        assert (tmp_path / "lights" / name).stat().st_size > 0, name
+    code, stdout, err = run("normals", UW / "cat", "--lights",
+                            tmp_path / "lights" / "light_directions.txt", "-o", tmp_path / "cat")
+    assert code == 0, err
+    assert "lights/light_directions.txt (directions)" in stdout
+    assert (tmp_path / "cat" / "normals.exr").exists()

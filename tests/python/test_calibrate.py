@@ -1,0 +1,109 @@
+"""Light calibration on the real data: UW's chrome sphere against its lights.txt and against an
+independent calibration from UW's matte gray sphere; DiLiGenT ball's photos and ground truth as a
+calibration target for cat; semi-calibrated intensities on DiLiGenT cat and ball."""
+import numpy as np
+import pytest
+
+import iphong
+from test_render import DATA
+
+UW = DATA / "uw"
+DILIGENT = DATA / "diligent"
+CROP = DATA / "diligent-crop8"
+needs_uw = pytest.mark.skipif(not (UW / "chrome").is_dir(), reason=f"UW data not found at {UW}")
+needs_diligent = pytest.mark.skipif(not (DILIGENT / "ball").is_dir() or not (CROP / "cat").is_dir(),
+                                    reason=f"DiLiGenT data not found at {DATA}")
+
+
+def angles_deg(a, b):
+    a = a / np.linalg.norm(a, axis=1)[:, None]
+    b = b / np.linalg.norm(b, axis=1)[:, None]
+    return np.degrees(np.arccos(np.clip((a * b).sum(1), -1, 1)))
+
+
+@needs_uw
+def test_uw_chrome_sphere_against_lights_txt_and_the_gray_sphere():
+    chrome = iphong.load_dataset(UW / "chrome")
+    mirror = iphong.calibrate_lights(chrome["images"], mask=chrome["mask"])
+    assert abs(mirror["spheres"][0]["radius_px"] - 120.1) < 0.5
+    assert any("highlights are clipped" in w for w in mirror["warnings"])
+    published = chrome["light_directions"]  # uw/lights.txt
+    to_published = angles_deg(mirror["light_directions"], published)
+    listing = ", ".join(f"{name} {e:.2f}" for name, e in zip(chrome["filenames"], to_published))
+    # Measured 3.06 deg mean (max 8.5 on chrome.1, whose highlight is 15 px right of the centre
+    # where lights.txt puts it 6 px): lights.txt fits the highlights only with a circle of
+    # radius 133 px, but the mask and the photos show 120.
+    assert to_published.mean() < 3.2, listing
+
+    # The matte gray sphere, calibrated from its shading alone, sides with the mirror.
+    gray = iphong.load_dataset(UW / "gray")
+    matte = iphong.calibrate_lights(gray["images"], mask=gray["mask"], sphere="matte")
+    gray_to_chrome = angles_deg(matte["light_directions"], mirror["light_directions"])
+    gray_to_published = angles_deg(matte["light_directions"], published)
+    # Measured 1.99 deg and 3.57 deg.
+    assert gray_to_chrome.mean() < 2.2
+    assert gray_to_chrome.mean() < gray_to_published.mean() - 1.0
+
+
+@needs_diligent
+def test_diligent_ball_is_a_calibration_target_for_cat():
+    ball = iphong.load_dataset(DILIGENT / "ball")
+    calibrated = iphong.calibrate_lights(ball["images"], mask=ball["mask"],
+                                         normals=ball["normal_gt"], uniform_albedo=True)
+    assert calibrated["converged"]
+    to_published = angles_deg(calibrated["light_directions"], ball["light_directions"])
+    published_intensities = ball["light_intensities"] / ball["light_intensities"].mean(0)
+    ratios = calibrated["light_intensities"] / published_intensities
+    # Measured: directions 1.35 deg mean (max 2.29), each about 1 deg further from the camera's
+    # axis than the published ones; intensity ratios 1.4 % mean.
+    assert to_published.mean() < 1.5
+    assert np.abs(ratios - 1).mean() < 0.02
+
+    # Cat, with the ball's lights instead of the published ones: measured 5.75 -> 5.23 deg
+    # (the default model) and 7.27 -> 6.82 (Lambert) on the 8-bit crop.
+    cat = iphong.load_dataset(CROP / "cat")
+    errors = {}
+    for name, directions, intensities in [
+            ("published", cat["light_directions"], cat["light_intensities"]),
+            ("calibrated", calibrated["light_directions"], calibrated["light_intensities"])]:
+        result = iphong.estimate_normals(cat["images"], directions, intensities, mask=cat["mask"])
+        errors[name] = iphong.angular_error(result["normals"], cat["normal_gt"],
+                                            cat["mask"])["mean_angular_error_deg"]
+    assert errors["calibrated"] < errors["published"] + 0.3, errors
+    assert errors["calibrated"] < 5.4, errors
+
+
+@needs_diligent
+@pytest.mark.parametrize("name, intensity_bound, measured", [("cat", 0.032, 0.0295),
+                                                             ("ball", 0.025, 0.0229)])
+def test_semi_calibrated_intensities(name, intensity_bound, measured):
+    d = iphong.load_dataset(CROP / name)
+    estimate = iphong.estimate_intensities(d["images"], d["light_directions"], mask=d["mask"])
+    published = d["light_intensities"] / d["light_intensities"].mean(0)
+    error = np.abs(estimate["light_intensities"] / published - 1).mean()
+    assert error < intensity_bound, f"{error:.4f} (measured {measured})"
+    assert estimate["eigen_gap"] > 2
+    errors = []
+    for intensities in [d["light_intensities"], estimate["light_intensities"]]:
+        result = iphong.estimate_normals(d["images"], d["light_directions"], intensities,
+                                         mask=d["mask"])
+        errors.append(iphong.angular_error(result["normals"], d["normal_gt"],
+                                           d["mask"])["mean_angular_error_deg"])
+    # Measured: cat 5.75 -> 5.73 deg, ball 2.61 -> 2.75.
+    assert errors[1] < errors[0] + 0.3, errors
+
+
+def test_calibrate_lights_bad_arguments():
+    images = np.zeros((3, 20, 20, 3), np.float32)
+    with pytest.raises(ValueError, match="give mask"):
+        iphong.calibrate_lights(images)
+    with pytest.raises(ValueError, match="sphere must be 'mirror' or 'matte'"):
+        iphong.calibrate_lights(images, circles=[(10, 10, 5)], sphere="glass")
+    with pytest.raises(ValueError, match=r"circles must have shape \(1, 3\) or \(2, 3\)"):
+        iphong.calibrate_lights(images, circles=[10, 10, 5])
+    with pytest.raises(ValueError, match="image 0: no highlight on the sphere at \\(10, 10\\)"):
+        iphong.calibrate_lights(images, circles=[(10, 10, 8)])
+    with pytest.raises(ValueError, match=r"normals must have shape \(H, W, 3\)"):
+        iphong.calibrate_lights(images, normals=np.zeros((10, 10, 3)))
+    with pytest.raises(ValueError, match="needs 4 images or more"):
+        iphong.estimate_intensities(images, [(0, 0, 1), (0, 1, 1), (1, 0, 1)])
