@@ -11,7 +11,8 @@ import zlib
 
 import pytest
 
-from cli import IPHONG, ROOT, assert_one_line_error, binary_available, run, snapshot
+from cli import (IPHONG, ROOT, assert_one_line_error, binary_available, render_dataset, run,
+                 snapshot)
 
 pytestmark = pytest.mark.skipif(not binary_available(), reason=f"no iphong binary at {IPHONG}")
 
@@ -199,3 +200,22 @@ def test_uw_chrome_calibrates_the_lights_uw_cat_is_solved_with(tmp_path):
     assert code == 0, err
     assert "lights/light_directions.txt (directions)" in stdout
     assert (tmp_path / "cat" / "normals.exr").exists()
+
+
+def test_normals_estimate_intensities_ignores_the_intensity_file(tmp_path):
+    dataset = tmp_path / "sphere"
+    render_dataset(dataset)
+    # An untrusted intensity file: --estimate-intensities must not read it.
+    (dataset / "light_intensities.txt").write_text("5 5 5\n" * 12)
+    code, stdout, err = run("normals", dataset, "--estimate-intensities", "-o", tmp_path / "out")
+    assert code == 0, err
+    assert "Estimated the 12 lights' intensities" in stdout
+    values = [list(map(float, line.split()))
+              for line in (tmp_path / "out" / "light_intensities.txt").read_text().splitlines()]
+    assert len(values) == 12
+    # Rendered with all 1; measured within 3% (the Lambertian elimination sees the Phong
+    # highlights, ks 0.4, and the ambient term through its trims).
+    assert all(abs(v - 1) < 0.04 for row in values for v in row), values
+    metrics = json.loads((tmp_path / "out" / "metrics.json").read_text())
+    assert metrics["estimated_intensities"]["eigen_gap"] > 2
+    assert metrics["mean_angular_error_deg"] < 0.5  # 0.29 measured
