@@ -16,6 +16,7 @@ std::string IntensityOptions::Check() const {
     return "discard_dark and discard_bright must be non-negative and leave a tenth of the lights";
   }
   if (rounds < 1 || rounds > 20) return "rounds must be 1 to 20";
+  if (max_pixels < 100) return "max_pixels must be at least 100";
   return "";
 }
 
@@ -41,54 +42,86 @@ IntensityEstimate EstimateIntensities(const solve::PhotometricData& data,
   std::vector<double> residual(pixels, 0), pixel_weight(pixels, 1.0);
   const int workers = std::max(1, std::min<int>(ResolveThreads(options.threads), 64));
   double gap = std::numeric_limits<double>::infinity();
+  // Every stride-th pixel: K intensities are fixed by far fewer pixels than an image has, and
+  // the cost is the pixels' K² updates.
+  const std::size_t stride =
+      std::max<std::size_t>(1, (pixels + options.max_pixels - 1) / options.max_pixels);
+  const std::size_t used = (pixels + stride - 1) / stride;
   for (int round = 0; round < options.rounds; ++round) {
-    std::vector<std::array<Eigen::MatrixXd, 3>> sums(workers);
+    // Per thread, the upper triangles of the three K × K sums, row-major.
+    std::vector<std::vector<double>> sums(workers);
     ParallelFor(0, workers, 1, options.threads, [&](std::size_t w0, std::size_t w1) {
       for (std::size_t t = w0; t < w1; ++t) {
-        for (auto& a : sums[t]) a = Eigen::MatrixXd::Zero(k, k);
-        std::vector<int> order(k);
-        std::vector<double> y(k);
-        const std::size_t p0 = pixels * t / workers, p1 = pixels * (t + 1) / workers;
-        for (std::size_t p = p0; p < p1; ++p) {
+        std::vector<double>& sum = sums[t];
+        sum.assign(3 * std::size_t(k) * k, 0.0);
+        std::vector<int> order(k), kept(last - first);
+        std::vector<double> y(k), h(3 * kept.size()), d(3 * kept.size());
+        const std::size_t i0 = used * t / workers, i1 = used * (t + 1) / workers;
+        for (std::size_t i = i0; i < i1; ++i) {
+          const std::size_t p = i * stride;
           const float* v = data.pixel(p);
           for (int j = 0; j < k; ++j)
             y[j] = (v[3 * j] * u(j, 0) + v[3 * j + 1] * u(j, 1) + v[3 * j + 2] * u(j, 2)) / 3;
           std::iota(order.begin(), order.end(), 0);
-          std::sort(order.begin(), order.end(), [&](int a, int b) { return y[a] < y[b]; });
-          const int n = last - first;
-          Eigen::MatrixX3d ls(n, 3);
-          Eigen::VectorXd ys(n);
-          for (int i = 0; i < n; ++i) {
-            ls.row(i) = lights.row(order[first + i]);
-            ys(i) = y[order[first + i]];
+          std::nth_element(order.begin(), order.begin() + first, order.end(),
+                           [&](int a, int b) { return y[a] < y[b]; });
+          std::nth_element(order.begin() + first, order.begin() + last, order.end(),
+                           [&](int a, int b) { return y[a] < y[b]; });
+          std::copy(order.begin() + first, order.begin() + last, kept.begin());
+          std::sort(kept.begin(), kept.end());  // ascending: the sums are written in order
+          const int n = static_cast<int>(kept.size());
+          Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+          Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+          for (int a = 0; a < n; ++a) {
+            const Eigen::Vector3d l = lights.row(kept[a]).transpose();
+            normal += l * l.transpose();
+            rhs += l * y[kept[a]];
           }
-          const Eigen::Matrix3d normal = ls.transpose() * ls;
           Eigen::LDLT<Eigen::Matrix3d> ldlt(normal);
           if (ldlt.info() != Eigen::Success || std::abs(normal.determinant()) < 1e-9) {
             pixel_weight[p] = 0;
+            residual[p] = std::numeric_limits<double>::infinity();
             continue;
           }
-          const Eigen::MatrixXd projector =
-              Eigen::MatrixXd::Identity(n, n) - ls * ldlt.solve(ls.transpose());
-          const Eigen::Vector3d m = ldlt.solve(ls.transpose() * ys);
-          residual[p] = m.norm() > 0 ? (ys - ls * m).norm() / std::sqrt(double(n)) / m.norm()
-                                     : std::numeric_limits<double>::infinity();
+          const Eigen::Vector3d m = ldlt.solve(rhs);
+          double r2 = 0;
+          for (int a = 0; a < n; ++a) {
+            const Eigen::Vector3d l = lights.row(kept[a]).transpose();
+            r2 += std::pow(y[kept[a]] - l.dot(m), 2);
+            const Eigen::Vector3d hl = ldlt.solve(l);
+            std::copy(hl.data(), hl.data() + 3, &h[3 * a]);
+          }
+          residual[p] =
+              m.norm() > 0 ? std::sqrt(r2 / n) / m.norm() : std::numeric_limits<double>::infinity();
           if (pixel_weight[p] <= 0) continue;
-          for (int c = 0; c < 3; ++c) {
-            Eigen::VectorXd d(n);
-            for (int i = 0; i < n; ++i) d(i) = v[3 * order[first + i] + c];
-            const Eigen::MatrixXd term =
-                pixel_weight[p] * projector.cwiseProduct(d * d.transpose());
-            for (int a = 0; a < n; ++a)
-              for (int b = 0; b < n; ++b)
-                sums[t][c](order[first + a], order[first + b]) += term(a, b);
+          const double root_w = std::sqrt(pixel_weight[p]);
+          for (int a = 0; a < n; ++a)
+            for (int c = 0; c < 3; ++c) d[3 * a + c] = root_w * v[3 * kept[a] + c];
+          // P⊥ = I − L (LᵀL)⁻¹ Lᵀ entry by entry, times d_a d_b per channel.
+          for (int a = 0; a < n; ++a) {
+            const double lax = lights(kept[a], 0), lay = lights(kept[a], 1),
+                         laz = lights(kept[a], 2);
+            double* row0 = &sum[std::size_t(kept[a]) * k];
+            double* row1 = row0 + std::size_t(k) * k;
+            double* row2 = row1 + std::size_t(k) * k;
+            for (int b = a; b < n; ++b) {
+              const double proj =
+                  (a == b) - (lax * h[3 * b] + lay * h[3 * b + 1] + laz * h[3 * b + 2]);
+              const int kb = kept[b];
+              row0[kb] += proj * d[3 * a] * d[3 * b];
+              row1[kb] += proj * d[3 * a + 1] * d[3 * b + 1];
+              row2[kb] += proj * d[3 * a + 2] * d[3 * b + 2];
+            }
           }
         }
       }
     });
     for (int c = 0; c < 3; ++c) {
       Eigen::MatrixXd a = Eigen::MatrixXd::Zero(k, k);
-      for (const auto& s : sums) a += s[c];
+      for (const auto& s : sums)
+        for (int r = 0; r < k; ++r)
+          for (int col = r; col < k; ++col) a(r, col) += s[(std::size_t(c) * k + r) * k + col];
+      a.triangularView<Eigen::StrictlyLower>() = a.transpose();
       Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(a);
       Eigen::VectorXd smallest = eigen.eigenvectors().col(0);
       if (smallest.sum() < 0) smallest = -smallest;
@@ -98,7 +131,7 @@ IntensityEstimate EstimateIntensities(const solve::PhotometricData& data,
     }
     // Next round: pixels weighted by how well Lambert explains their kept observations.
     std::vector<double> finite;
-    for (std::size_t p = 0; p < pixels; ++p)
+    for (std::size_t p = 0; p < pixels; p += stride)
       if (std::isfinite(residual[p])) finite.push_back(residual[p]);
     if (finite.empty()) break;
     std::nth_element(finite.begin(), finite.begin() + finite.size() / 2, finite.end());

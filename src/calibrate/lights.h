@@ -169,6 +169,7 @@ struct IntensityOptions {
   double discard_dark = 0.3;    // per pixel, its darkest observations (shadows) left out
   double discard_bright = 0.1;  // and its brightest (highlights)
   int rounds = 3;
+  std::size_t max_pixels = 50000;  // more are subsampled evenly: K numbers need far fewer
   int threads = 0;
   std::string Check() const;
 };
