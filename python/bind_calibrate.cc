@@ -55,6 +55,29 @@ py::list Notes(const std::vector<calibrate::CalibrationNote>& notes) {
   return out;
 }
 
+// A matte sphere or a normal map: the shading's inverse, its results into `out`; returns the
+// warnings.
+py::list FromNormals(const std::vector<const ImageF*>& images, const ImageF& normals,
+                     const Mask& where, bool uniform_albedo, double saturation, int threads,
+                     py::dict& out) {
+  calibrate::KnownNormalOptions options;
+  options.saturation = saturation;
+  options.uniform_albedo = uniform_albedo;
+  options.threads = threads;
+  calibrate::KnownNormalCalibration c;
+  {
+    py::gil_scoped_release release;
+    c = calibrate::CalibrateFromNormals(images, normals, where, options);
+  }
+  out["light_directions"] = ToArray(c.light_dir_cam);
+  out["light_intensities"] = ToArray(c.light_intensities);
+  out["residual"] = c.residual;
+  out["pixels_used"] = c.pixels_used;
+  out["converged"] = c.converged;
+  out["seconds"] = c.seconds;
+  return Notes(c.warnings);
+}
+
 }  // namespace
 
 void BindCalibrate(py::module_& m) {
@@ -74,22 +97,8 @@ void BindCalibrate(py::module_& m) {
           if (normals.width != w || normals.height != h || normals.channels != 3) {
             throw std::invalid_argument("normals must have shape (H, W, 3) like the images");
           }
-          calibrate::KnownNormalOptions options;
-          options.saturation = saturation;
-          options.uniform_albedo = uniform_albedo;
-          options.threads = threads;
-          calibrate::KnownNormalCalibration c;
-          {
-            py::gil_scoped_release release;
-            c = calibrate::CalibrateFromNormals(pointers, normals, mask, options);
-          }
-          out["light_directions"] = ToArray(c.light_dir_cam);
-          out["light_intensities"] = ToArray(c.light_intensities);
-          out["residual"] = c.residual;
-          out["pixels_used"] = c.pixels_used;
-          out["converged"] = c.converged;
-          out["warnings"] = Notes(c.warnings);
-          out["seconds"] = c.seconds;
+          out["warnings"] =
+              FromNormals(pointers, normals, mask, uniform_albedo, saturation, threads, out);
           return out;
         }
         if (sphere != "mirror" && sphere != "matte") {
@@ -172,20 +181,9 @@ void BindCalibrate(py::module_& m) {
         } else {
           Mask on_sphere;
           const ImageF normals = calibrate::SphereNormalMap(spheres, w, h, &on_sphere);
-          calibrate::KnownNormalOptions options;
-          options.uniform_albedo = true;
-          options.saturation = saturation;
-          options.threads = threads;
-          calibrate::KnownNormalCalibration c;
-          {
-            py::gil_scoped_release release;
-            c = calibrate::CalibrateFromNormals(pointers, normals, on_sphere, options);
-          }
-          out["light_directions"] = ToArray(c.light_dir_cam);
-          out["light_intensities"] = ToArray(c.light_intensities);
-          out["residual"] = c.residual;
-          for (const auto& w : Notes(c.warnings)) warnings.append(w);
-          out["seconds"] = c.seconds;
+          for (const auto& n :
+               FromNormals(pointers, normals, on_sphere, true, saturation, threads, out))
+            warnings.append(n);
         }
         out["warnings"] = warnings;
         return out;

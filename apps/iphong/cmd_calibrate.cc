@@ -108,19 +108,14 @@ void RunCalibrate(const CalibrateOptions& o) {
   nlohmann::json per_image = nlohmann::json::array();
   std::string intensity_source;
 
-  if (known_normals) {
-    Mask normal_mask;
-    ImageF normals = io::ReadNormalMap(o.normals, false, &normal_mask, o.common.memory());
-    if (normals.width != dataset.width() || normals.height != dataset.height()) {
-      throw std::runtime_error(o.normals + ": is " + SizeText(normals.width, normals.height) +
-                               ", the images are " + SizeText(dataset.width(), dataset.height()));
-    }
+  // A matte sphere or a normal map: the shading's inverse (known_normals.cc).
+  auto from_normals = [&](const ImageF& normals, const Mask& where, bool uniform_albedo) {
     calibrate::KnownNormalOptions options;
     options.saturation = o.saturation;
-    options.uniform_albedo = o.uniform_albedo;
+    options.uniform_albedo = uniform_albedo;
     options.threads = o.common.threads;
     const calibrate::KnownNormalCalibration c =
-        calibrate::CalibrateFromNormals(images, normals, dataset.mask, options);
+        calibrate::CalibrateFromNormals(images, normals, where, options);
     directions = c.light_dir_cam;
     intensities = c.light_intensities;
     notes = c.warnings;
@@ -136,6 +131,16 @@ void RunCalibrate(const CalibrateOptions& o) {
                            {"relative_residual", c.residual[j]},
                            {"pixels_used", c.pixels_used[j]}});
     }
+  };
+
+  if (known_normals) {
+    Mask normal_mask;
+    ImageF normals = io::ReadNormalMap(o.normals, false, &normal_mask, o.common.memory());
+    if (normals.width != dataset.width() || normals.height != dataset.height()) {
+      throw std::runtime_error(o.normals + ": is " + SizeText(normals.width, normals.height) +
+                               ", the images are " + SizeText(dataset.width(), dataset.height()));
+    }
+    from_normals(normals, dataset.mask, o.uniform_albedo);
   } else {
     std::vector<calibrate::SphereOutline> outlines;
     std::vector<std::string> sphere_warnings;
@@ -228,27 +233,7 @@ void RunCalibrate(const CalibrateOptions& o) {
       Mask on_sphere;
       const ImageF normals =
           calibrate::SphereNormalMap(spheres, dataset.width(), dataset.height(), &on_sphere);
-      calibrate::KnownNormalOptions options;
-      options.uniform_albedo = true;
-      options.saturation = o.saturation;
-      options.threads = o.common.threads;
-      const calibrate::KnownNormalCalibration c =
-          calibrate::CalibrateFromNormals(images, normals, on_sphere, options);
-      directions = c.light_dir_cam;
-      intensities = c.light_intensities;
-      notes = c.warnings;
-      intensity_source = "measured (relative; each channel's mean is 1)";
-      report["rounds"] = c.rounds;
-      report["converged"] = c.converged;
-      report["last_move_deg"] = c.last_move_deg;
-      report["seconds"] = c.seconds;
-      for (std::size_t j = 0; j < k; ++j) {
-        per_image.push_back({{"file", dataset.filenames[j]},
-                             {"light_direction", Vector(directions[j])},
-                             {"intensity", Vector(intensities[j])},
-                             {"relative_residual", c.residual[j]},
-                             {"pixels_used", c.pixels_used[j]}});
-      }
+      from_normals(normals, on_sphere, true);
     }
   }
 
