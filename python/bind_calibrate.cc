@@ -69,6 +69,13 @@ py::list FromNormals(const std::vector<const ImageF*>& images, const ImageF& nor
     py::gil_scoped_release release;
     c = calibrate::CalibrateFromNormals(images, normals, where, options);
   }
+  if (!c.failed.empty()) {
+    throw std::invalid_argument("image " + std::to_string(c.failed[0]) +
+                                ": no pixel is lit where the normals say (" +
+                                std::to_string(c.failed.size()) +
+                                " images so): the light misses the object, or the normals are "
+                                "not the object's");
+  }
   out["light_directions"] = ToArray(c.light_dir_cam);
   out["light_intensities"] = ToArray(c.light_intensities);
   out["residual"] = c.residual;
@@ -108,7 +115,9 @@ void BindCalibrate(py::module_& m) {
         if (!intrinsics.is_none()) {
           const std::vector<double> v = ToNumbers(intrinsics, 4, "intrinsics");
           camera = {v[0], v[1], v[2], v[3]};
-          if (std::string e = camera.Check(); !e.empty()) throw std::invalid_argument(e);
+          if (std::string e = camera.Check(); !e.empty() || !camera.perspective()) {
+            throw std::invalid_argument("intrinsics: fx and fy must be > 0, cx and cy finite");
+          }
         }
         std::vector<calibrate::SphereOutline> outlines;
         std::vector<std::string> sphere_warnings;
@@ -125,6 +134,9 @@ void BindCalibrate(py::module_& m) {
             s.center_x_px = c.x();
             s.center_y_px = c.y();
             s.radius_px = c.z();
+            if (std::string m = calibrate::CheckCircle(s, w, h); !m.empty()) {
+              throw std::invalid_argument("circles: " + m);
+            }
             outlines.push_back(s);
           }
         } else {

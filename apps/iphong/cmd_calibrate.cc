@@ -61,7 +61,9 @@ void RunCalibrate(const CalibrateOptions& o) {
   calibrate::Intrinsics camera;
   if (!o.intrinsics.empty()) {
     camera = {o.intrinsics[0], o.intrinsics[1], o.intrinsics[2], o.intrinsics[3]};
-    if (std::string m = camera.Check(); !m.empty()) throw CLI::ValidationError("--intrinsics", m);
+    if (std::string m = camera.Check(); !m.empty() || !camera.perspective()) {
+      throw CLI::ValidationError("--intrinsics", "fx and fy must be > 0, cx and cy finite");
+    }
   }
   const bool known_normals = !o.normals.empty();
   if (known_normals && o.sphere != "mirror") {
@@ -116,6 +118,13 @@ void RunCalibrate(const CalibrateOptions& o) {
     options.threads = o.common.threads;
     const calibrate::KnownNormalCalibration c =
         calibrate::CalibrateFromNormals(images, normals, where, options);
+    if (!c.failed.empty()) {
+      throw std::runtime_error(
+          dataset.files.paths[c.failed[0]] + ": no pixel is lit in this photo where the normals " +
+          (known_normals ? "of " + o.normals : std::string("of the sphere")) + " say (" +
+          std::to_string(c.failed.size()) +
+          " photos so): the light misses the object, or the normals are not the object's");
+    }
     directions = c.light_dir_cam;
     intensities = c.light_intensities;
     notes = c.warnings;
@@ -151,6 +160,10 @@ void RunCalibrate(const CalibrateOptions& o) {
         s.center_y_px = o.circles[i + 1];
         s.radius_px = o.circles[i + 2];
         if (!(s.radius_px > 0)) throw CLI::ValidationError("--circle", "the radius must be > 0");
+        if (std::string m = calibrate::CheckCircle(s, dataset.width(), dataset.height());
+            !m.empty()) {
+          throw CLI::ValidationError("--circle", m);
+        }
         outlines.push_back(s);
       }
     } else {
@@ -312,7 +325,7 @@ void AddCalibrateCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--saturation", o->saturation,
                   "Values at or above this are clipped (images read as 0-1)")
-      ->check(CLI::PositiveNumber)
+      ->check(Positive())
       ->capture_default_str();
   cmd->add_option("--mask", o->capture.options.mask,
                   "Mask picture of the sphere(s) or object (default: mask.png, mask.*, "

@@ -182,7 +182,7 @@ void AddIntegrateCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--albedo", o->albedo, "Albedo image: mesh colours and preview");
   cmd->add_option("--pixel-size", o->options.pixel_size, "Scene units per pixel (orthographic)")
-      ->check(CLI::PositiveNumber)
+      ->check(Positive())
       ->capture_default_str();
   cmd->add_option("--intrinsics", o->intrinsics,
                   "Perspective camera fx,fy,cx,cy in pixels: integrate log depth")
@@ -191,7 +191,7 @@ void AddIntegrateCommand(CLI::App& app) {
   cmd->add_option("--depth-prior", o->depth_prior,
                   "1-channel EXR of known heights (or depths with --intrinsics), NaN = unknown");
   cmd->add_option("--prior-weight", o->options.prior_weight, "Weight of the depth prior per pixel")
-      ->check(CLI::PositiveNumber)
+      ->check(Positive())
       ->capture_default_str();
   cmd->add_option("--min-cos", o->options.min_cos,
                   "Grazing guard: smallest cosine between normal and view")
@@ -199,7 +199,7 @@ void AddIntegrateCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--stiffness", o->options.stiffness,
                   "bilateral: how sharply a depth step cuts (larger = more cuts)")
-      ->check(CLI::PositiveNumber)
+      ->check(Positive())
       ->capture_default_str();
   cmd->add_option("--normal-map-convention", o->convention, "Green axis of PNG normal maps")
       ->check(CLI::IsMember({"opengl", "directx"}))

@@ -397,7 +397,7 @@ void AddNormalsCommand(CLI::App& app) {
   cmd->add_option("--shadow-threshold", o->shadow_threshold,
                   "Observations darker than the model by more than this fraction of the pixel's "
                   "brightness count as shadowed (censored)")
-      ->check(CLI::PositiveNumber)
+      ->check(Positive())
       ->capture_default_str();
   cmd->add_option("--irls-rounds", o->irls_rounds, "Censoring rounds of the local fit")
       ->check(CLI::Range(1, 20))

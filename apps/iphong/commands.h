@@ -22,6 +22,9 @@ constexpr const char* kExitCodes =
     "130/143 interrupted (SIGINT/SIGTERM). An error is one line on stderr, naming the file; a "
     "failed or interrupted run leaves its output folder as it was.";
 
+// A number > 0; the message says so (CLI11's PositiveNumber prints the whole double range).
+const CLI::Validator& Positive();
+
 // Flags most commands share.
 struct CommonOptions {
   int threads = 0;

@@ -1,4 +1,5 @@
 // Flags and checks the subcommands share.
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <filesystem>
@@ -9,6 +10,19 @@
 namespace iphong::cli {
 namespace fs = std::filesystem;
 
+const CLI::Validator& Positive() {
+  static const CLI::Validator validator(
+      [](std::string& text) -> std::string {
+        double value = 0;
+        if (!CLI::detail::lexical_cast(text, value) || !(value > 0) || !std::isfinite(value)) {
+          return "must be a number > 0 (got " + text + ")";
+        }
+        return "";
+      },
+      "POSITIVE");
+  return validator;
+}
+
 void AddThreadsOption(CLI::App* cmd, CommonOptions& common) {
   cmd->add_option("--threads", common.threads, "Threads (0 = all cores)")
       ->check(CLI::Range(0, 1024));
@@ -18,7 +32,7 @@ void AddMemoryOption(CLI::App* cmd, CommonOptions& common) {
   cmd->add_option("--max-memory", common.max_memory_gb,
                   "Refuse work that needs more memory than this many GB (default: 3/4 of the "
                   "machine's)")
-      ->check(CLI::PositiveNumber);
+      ->check(Positive());
 }
 
 void AddOverwriteOption(CLI::App* cmd, CommonOptions& common) {

@@ -54,6 +54,10 @@ struct SphereSearch {
 std::vector<SphereOutline> FindSpheres(const Mask& mask, const SphereSearch& search,
                                        std::vector<std::string>* warnings);
 
+// "" or why a circle given by hand cannot be a sphere in width × height images (less than half
+// of it inside).
+std::string CheckCircle(const SphereOutline& circle, int width, int height);
+
 // A sphere in the camera frame. Orthographic: centre (cx, −cy, 0) and radius r in pixels.
 // Perspective: the cone of rays tangent to the outline gives the centre's direction and the
 // ratio distance/radius; the radius is 1.
@@ -145,6 +149,7 @@ struct KnownNormalCalibration {
   std::vector<Rgb> light_intensities;  // each channel's mean over the lights is 1
   std::vector<double> residual;        // per light: RMS relative residual of the inliers
   std::vector<int> pixels_used;        // per light
+  std::vector<int> failed;  // lights no pixel is lit by (as the normals say): no direction
   int rounds = 0;
   bool converged = false;
   // The largest direction change in the last round. Alternation converges linearly: on

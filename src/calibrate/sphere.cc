@@ -51,7 +51,31 @@ void FitCircle(const std::vector<Vec2d>& points, double* cx, double* cy, double*
   *rms = std::sqrt(sum / points.size());
 }
 
+double VisibleFraction(const SphereOutline& s, int width, int height) {
+  int visible = 0;
+  for (int i = 0; i < 720; ++i) {
+    const double a = i * M_PI / 360;
+    const double x = s.center_x_px + s.radius_px * std::cos(a);
+    const double y = s.center_y_px + s.radius_px * std::sin(a);
+    visible += x >= 0 && y >= 0 && x <= width && y <= height;
+  }
+  return visible / 720.0;
+}
+
 }  // namespace
+
+std::string CheckCircle(const SphereOutline& circle, int width, int height) {
+  if (!(circle.radius_px > 0) || !std::isfinite(circle.radius_px) ||
+      !std::isfinite(circle.center_x_px) || !std::isfinite(circle.center_y_px)) {
+    return "a circle needs a finite centre and a radius > 0";
+  }
+  if (VisibleFraction(circle, width, height) < 0.5) {
+    return "the circle (" + Round1(circle.center_x_px) + ", " + Round1(circle.center_y_px) +
+           ", r " + Round1(circle.radius_px) + ") lies mostly outside the " +
+           SizeText(width, height) + " images";
+  }
+  return "";
+}
 
 std::string Intrinsics::Check() const {
   if (fx == 0 && fy == 0) return "";
@@ -121,14 +145,7 @@ std::vector<SphereOutline> FindSpheres(const Mask& mask, const SphereSearch& sea
       throw std::invalid_argument(where + " fills the image: no outline to fit a sphere to");
     }
     FitCircle(s.points_px, &s.center_x_px, &s.center_y_px, &s.radius_px, &s.fit_rms_px);
-    int visible = 0;
-    for (int i = 0; i < 720; ++i) {
-      const double a = i * M_PI / 360;
-      const double x = s.center_x_px + s.radius_px * std::cos(a);
-      const double y = s.center_y_px + s.radius_px * std::sin(a);
-      visible += x >= 0 && y >= 0 && x <= mask.width && y <= mask.height;
-    }
-    s.visible_fraction = visible / 720.0;
+    s.visible_fraction = VisibleFraction(s, mask.width, mask.height);
     if (s.fit_rms_px > search.max_rms_ratio * s.radius_px + 0.5) {
       throw std::invalid_argument(where + " is not round (its outline lies " +
                                   Round1(s.fit_rms_px) + " px RMS from the best circle, radius " +

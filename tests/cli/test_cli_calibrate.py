@@ -219,3 +219,30 @@ def test_normals_estimate_intensities_ignores_the_intensity_file(tmp_path):
     metrics = json.loads((tmp_path / "out" / "metrics.json").read_text())
     assert metrics["estimated_intensities"]["eigen_gap"] > 2
     assert metrics["mean_angular_error_deg"] < 0.5  # 0.29 measured
+
+
+@pytest.mark.parametrize("args, code, pattern", [
+    (["--circle", "1000,1000,50"], 2,
+     r"--circle: the circle \(1000\.0, 1000\.0, r 50\.0\) lies mostly outside the 96x96 images"),
+    (["--intrinsics", "0,0,48,48"], 2, r"--intrinsics: fx and fy must be > 0, cx and cy finite"),
+    (["--saturation", "0"], 2, r"--saturation: must be a number > 0 \(got 0\)"),
+])
+def test_bad_flags(tmp_path, args, code, pattern):
+    folder = capture(tmp_path / "ball")
+    before = snapshot(tmp_path)
+    result, _, err = run("calibrate-lights", folder, "-o", tmp_path / "out", *args)
+    assert_one_line_error(result, err, code, pattern)
+    assert snapshot(tmp_path) == before
+
+
+def test_normals_that_light_no_pixel_are_an_error(tmp_path):
+    folder = capture(tmp_path / "ball")
+    # A flat normal map facing away from every light: nothing it says can be lit.
+    rows = [bytes([128, 128, 0] * SIZE)] * SIZE  # n = (0, 0, -1)
+    (tmp_path / "away.png").write_bytes(png(SIZE, SIZE, rows, 3))
+    code, _, err = run("calibrate-lights", folder, "--normals", tmp_path / "away.png", "-o",
+                       tmp_path / "out")
+    assert_one_line_error(code, err, 1,
+                          r"ball\.1\.png: no pixel is lit in this photo where the normals of "
+                          r".*away\.png say \(6 photos so\)")
+    assert not (tmp_path / "out").exists()
