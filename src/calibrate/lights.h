@@ -127,7 +127,8 @@ struct MirrorCalibration {
 // Per image and sphere the highlight; per image the direction: the spheres' mean, or, with point
 // positions, the direction from the midpoint of the sphere centres toward the light. Positions
 // need two spheres whose reflected rays meet (closest distance under a tenth of the distance to
-// the light) in every image. Intensities: the highlights' energy (a mirror ball maps equal solid
+// the light, and an angle between them over three times their summed uncertainties) in every
+// image. Intensities: the highlights' energy (a mirror ball maps equal solid
 // angles to equal areas, so the sum over the sphere is the light's irradiance) when no highlight
 // pixel is clipped, else all 1 with a warning. Per-image failures are reported, not thrown.
 MirrorCalibration CalibrateMirror(const std::vector<const ImageF*>& images,

@@ -234,7 +234,10 @@ MirrorCalibration CalibrateMirror(const std::vector<const ImageF*>& images,
       double gap;
       positions[j] = ClosestPoint(a.point_cam, a.light_dir_cam, b.point_cam, b.light_dir_cam, &gap);
       result.triangulation_gap[j] = gap;
-      all = std::isfinite(gap) && gap < 0.1 * (positions[j] - middle).norm();
+      // Rays closer to parallel than three standard errors meet wherever the noise puts them.
+      const double parallax = AngleDeg(a.light_dir_cam, b.light_dir_cam);
+      all = std::isfinite(gap) && gap < 0.1 * (positions[j] - middle).norm() &&
+            parallax > 3 * (a.uncertainty_deg + b.uncertainty_deg);
     }
     if (all) {
       result.light_position_cam = positions;

@@ -246,3 +246,47 @@ def test_normals_that_light_no_pixel_are_an_error(tmp_path):
                           r"ball\.1\.png: no pixel is lit in this photo where the normals of "
                           r".*away\.png say \(6 photos so\)")
     assert not (tmp_path / "out").exists()
+
+
+def two_sphere_image(light, width=176, centres=(44.0, 132.0), radius=36.0):
+    """Two mirror balls side by side under one distant light."""
+    light = unit(light)
+    rows = []
+    for r in range(SIZE):
+        row = bytearray()
+        for c in range(width):
+            value = 0.0
+            for cx in centres:
+                dx, dy = (c + 0.5 - cx) / radius, -(r + 0.5 - CY) / radius
+                if dx * dx + dy * dy < 1:
+                    nz = math.sqrt(1 - dx * dx - dy * dy)
+                    reflected = [2 * nz * dx, 2 * nz * dy, 2 * nz * nz - 1]
+                    cos = max(-1.0, min(1.0, sum(a * b for a, b in zip(reflected, light))))
+                    value = 0.02 + 0.8 * math.exp(-0.5 * (math.degrees(math.acos(cos)) / 4) ** 2)
+            row += bytes([min(255, round(255 * value))] * 3)
+        rows.append(bytes(row))
+    mask = [bytes(255 if any(((c + 0.5 - cx) ** 2 + (r + 0.5 - CY) ** 2) < radius ** 2
+                             for cx in centres) else 0 for c in range(width)) for r in range(SIZE)]
+    return png(width, SIZE, rows, 3), png(width, SIZE, mask, 1)
+
+
+def test_two_spheres_under_distant_lights(tmp_path):
+    folder = tmp_path / "rig"
+    folder.mkdir()
+    for j, light in enumerate(LIGHTS):
+        image, mask = two_sphere_image(light)
+        (folder / f"rig.{j + 1}.png").write_bytes(image)
+    (folder / "mask.png").write_bytes(mask)
+    out = tmp_path / "lights"
+    code, _, err = run("calibrate-lights", folder, "-o", out)
+    assert code == 0, err
+    # Distant lights: the two spheres' reflected rays are parallel and meet nowhere.
+    assert "no point-light positions: the two spheres' reflected rays do not meet" in err
+    assert not (out / "light_positions.txt").exists()
+    report = json.loads((out / "calibration.json").read_text())
+    assert len(report["spheres"]) == 2
+    for entry, truth in zip(report["per_image"], LIGHTS):
+        assert len(entry["highlights"]) == 2
+        assert angle_deg(entry["light_direction"], truth) < 0.3
+        a, b = (h["light_direction"] for h in entry["highlights"])
+        assert angle_deg(a, b) < 0.5
