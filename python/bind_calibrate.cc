@@ -140,12 +140,11 @@ void BindCalibrate(py::module_& m) {
             outlines.push_back(s);
           }
         } else {
-          if (mask_in.is_none()) {
-            throw std::invalid_argument("give mask (the sphere's) or circles [(cx, cy, r)]");
-          }
           calibrate::SphereSearch search;
           search.max_spheres = max_spheres;
-          outlines = calibrate::FindSpheres(mask, search, &sphere_warnings);
+          outlines = mask_in.is_none()
+                         ? calibrate::FindSpheresInImages(pointers, search, &sphere_warnings)
+                         : calibrate::FindSpheres(mask, search, &sphere_warnings);
         }
         std::vector<calibrate::SphereGeometry> spheres;
         py::list sphere_list;
@@ -210,8 +209,8 @@ void BindCalibrate(py::module_& m) {
 images (K, H, W, 3) linear float. With normals (H, W, 3): calibrate from an object of known
 normals (mask: where to use them), by robust Lambertian least squares with a per-pixel albedo
 (one albedo with uniform_albedo=True: a painted target).
-Otherwise a sphere, found in mask (largest regions, up to max_spheres) or given as circles
-[(cx, cy, r), ...] in pixels; sphere "mirror" (the highlights; two spheres also triangulate
+Otherwise a sphere, found in mask (largest regions, up to max_spheres), given as circles
+[(cx, cy, r), ...] in pixels, or without either found in the photos (with a warning); sphere "mirror" (the highlights; two spheres also triangulate
 point-light positions) or "matte" (the shading, one albedo). intrinsics (fx, fy, cx, cy) for a
 perspective camera. Returns light_directions (K, 3), light_intensities (K, 3; each channel's mean
 1, or all 1 when a mirror's highlights are clipped), warnings, and per method: spheres,

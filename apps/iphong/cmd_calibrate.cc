@@ -167,20 +167,19 @@ void RunCalibrate(const CalibrateOptions& o) {
         outlines.push_back(s);
       }
     } else {
-      if (dataset.files.mask_path.empty()) {
-        throw std::runtime_error(o.images +
-                                 ": no sphere mask (mask.png, NAME.mask.*): give --mask or "
-                                 "--circle cx,cy,r");
-      }
       calibrate::SphereSearch search;
       search.max_spheres = o.max_spheres;
+      const bool masked = !dataset.files.mask_path.empty();
+      const std::string source = masked ? dataset.files.mask_path : o.images;
       try {
-        outlines = calibrate::FindSpheres(dataset.mask, search, &sphere_warnings);
+        outlines = masked ? calibrate::FindSpheres(dataset.mask, search, &sphere_warnings)
+                          : calibrate::FindSpheresInImages(images, search, &sphere_warnings);
       } catch (const std::invalid_argument& e) {
-        throw std::runtime_error(dataset.files.mask_path + ": " + e.what());
+        throw std::runtime_error(source + ": " + e.what());
       }
     }
-    for (const std::string& w : sphere_warnings) Warn(dataset.files.mask_path + ": " + w);
+    for (const std::string& w : sphere_warnings)
+      Warn((dataset.files.mask_path.empty() ? o.images : dataset.files.mask_path) + ": " + w);
     std::vector<calibrate::SphereGeometry> spheres;
     for (const calibrate::SphereOutline& s : outlines) {
       spheres.push_back(calibrate::SphereFromOutline(s, camera));

@@ -54,6 +54,17 @@ struct SphereSearch {
 std::vector<SphereOutline> FindSpheres(const Mask& mask, const SphereSearch& search,
                                        std::vector<std::string>* warnings);
 
+// Without a mask: the spheres' outlines in the photos themselves. The mean of the images (the
+// sphere against its background, whatever the light) is tone-mapped (square root of the 99th
+// percentile) and searched for circles (cv::HoughCircles); each is refined by fitting a circle to
+// the Canny edges within a few pixels of it, which must cover 60 % of its circumference (UW's
+// chrome sphere, dark and on a stand: 71 %). A second sphere is taken only with at least 0.7 of
+// the first's votes and a radius within 30 % of it. Throws std::invalid_argument when no circle
+// is found or its edges are not round; always warns that the sphere was found this way.
+std::vector<SphereOutline> FindSpheresInImages(const std::vector<const ImageF*>& images,
+                                               const SphereSearch& search,
+                                               std::vector<std::string>* warnings);
+
 // "" or why a circle given by hand cannot be a sphere in width × height images (less than half
 // of it inside).
 std::string CheckCircle(const SphereOutline& circle, int width, int height);

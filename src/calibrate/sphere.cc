@@ -169,6 +169,95 @@ std::vector<SphereOutline> FindSpheres(const Mask& mask, const SphereSearch& sea
   return spheres;
 }
 
+std::vector<SphereOutline> FindSpheresInImages(const std::vector<const ImageF*>& images,
+                                               const SphereSearch& search,
+                                               std::vector<std::string>* warnings) {
+  if (std::string m = search.Check(); !m.empty()) throw std::invalid_argument(m);
+  if (images.empty()) throw std::invalid_argument("no images");
+  const int w = images[0]->width, h = images[0]->height;
+  cv::Mat mean(h, w, CV_32F, cv::Scalar(0));
+  for (const ImageF* image : images) {
+    for (int r = 0; r < h; ++r) {
+      for (int c = 0; c < w; ++c) {
+        const float* v = image->at(c, r);
+        float sum = 0;
+        for (int k = 0; k < image->channels; ++k) sum += v[k];
+        mean.at<float>(r, c) += sum / image->channels / images.size();
+      }
+    }
+  }
+  std::vector<float> values(mean.begin<float>(), mean.end<float>());
+  std::nth_element(values.begin(), values.begin() + values.size() * 99 / 100, values.end());
+  const float white = std::max(values[values.size() * 99 / 100], 1e-12f);
+  cv::Mat tone, gray;
+  cv::sqrt(cv::max(mean, 0.0f) / white, tone);
+  tone.convertTo(gray, CV_8U, 255.0);
+  cv::Mat smooth;
+  cv::GaussianBlur(gray, smooth, cv::Size(5, 5), 1.5);
+  const double size = std::min(w, h);
+  std::vector<cv::Vec4f> found;  // x, y, r, votes
+  cv::HoughCircles(smooth, found, cv::HOUGH_GRADIENT, 1, size / 4, 100, 30,
+                   std::max<int>(search.min_radius_px, int(size / 20)), int(size / 2));
+  if (found.empty()) {
+    throw std::invalid_argument(
+        "no sphere found in the photos (no circle in their mean); give --mask or --circle");
+  }
+  cv::Mat edges;
+  cv::Canny(gray, edges, 50, 100);
+  std::vector<SphereOutline> spheres;
+  for (std::size_t i = 0; i < found.size() && int(spheres.size()) < search.max_spheres; ++i) {
+    const cv::Vec4f& f = found[i];
+    if (i > 0) {
+      const cv::Vec4f& first = found[0];
+      const bool strong = f[3] >= 0.7 * first[3];
+      const bool alike = std::abs(f[2] - first[2]) <= 0.3 * first[2];
+      const bool apart = std::hypot(f[0] - first[0], f[1] - first[1]) > f[2] + first[2];
+      if (!strong || !alike || !apart) continue;
+    }
+    SphereOutline s;
+    const double band = std::max(3.0, 0.05 * f[2]);
+    for (int r = 0; r < h; ++r) {
+      for (int c = 0; c < w; ++c) {
+        if (!edges.at<unsigned char>(r, c)) continue;
+        const double d = std::hypot(c + 0.5 - f[0], r + 0.5 - f[1]);
+        if (std::abs(d - f[2]) <= band) s.points_px.emplace_back(c + 0.5, r + 0.5);
+      }
+    }
+    const std::string where = "the circle found at (" + Round1(f[0]) + ", " + Round1(f[1]) +
+                              "), radius " + Round1(f[2]) + " px";
+    if (s.points_px.size() < 3 * f[2]) {  // under half the circumference: not an outline
+      throw std::invalid_argument(where +
+                                  " has too few edges to be a sphere's outline; give "
+                                  "--mask or --circle");
+    }
+    FitCircle(s.points_px, &s.center_x_px, &s.center_y_px, &s.radius_px, &s.fit_rms_px);
+    // A sphere's outline shows all round (but where its stand or the image edge hides it); an
+    // object's arc that happens to fit a circle covers only part of it.
+    std::vector<char> bins(72, 0);
+    for (const Vec2d& q : s.points_px) {
+      const double a = std::atan2(q.y() - s.center_y_px, q.x() - s.center_x_px);
+      bins[std::min(71, int((a + M_PI) / (2 * M_PI) * 72))] = 1;
+    }
+    const double coverage = std::count(bins.begin(), bins.end(), 1) / 72.0;
+    if (coverage < 0.6) {
+      throw std::invalid_argument(where + " shows edges over only " +
+                                  std::to_string(int(std::round(100 * coverage))) +
+                                  "% of its circumference: not a sphere's outline; give --mask or "
+                                  "--circle");
+    }
+    if (s.fit_rms_px > search.max_rms_ratio * s.radius_px + 0.5) {
+      throw std::invalid_argument(where + ": its edges lie " + Round1(s.fit_rms_px) +
+                                  " px RMS from a circle: not a sphere; give --mask or --circle");
+    }
+    s.visible_fraction = VisibleFraction(s, w, h);
+    warnings->push_back("no mask: found a sphere in the photos at (" + Round1(s.center_x_px) +
+                        ", " + Round1(s.center_y_px) + "), radius " + Round1(s.radius_px) +
+                        " px; check calibration.png, or give --mask or --circle");
+    spheres.push_back(std::move(s));
+  }
+  return spheres;
+}
+
 SphereGeometry SphereFromOutline(const SphereOutline& outline, const Intrinsics& camera) {
   if (std::string m = camera.Check(); !m.empty()) throw std::invalid_argument(m);
   SphereGeometry g;

@@ -132,6 +132,35 @@ TEST(FindSpheres, ReportsNoSphereNotRoundAndClipped) {
   }
 }
 
+TEST(FindSpheresInImages, FindsAMatteSphereInItsPhotosToHalfAPixel) {
+  const Camera camera = Camera::Orthographic(240, 200, 2.4);  // 100 px per unit
+  const geometry::SurfaceMap surface = geometry::SampleSphere(camera, Vec3d(0.2, 0.1, 0), 0.75);
+  Material matte;
+  matte.kd = Vec3d::Constant(0.7);
+  std::vector<Light> lights;
+  for (const Vec3d& l : SpiralLights(8, 50)) lights.push_back(Light::Directional(l, Rgb::Ones()));
+  const Capture c = ShadeEach(surface, camera, matte, lights);
+  std::vector<std::string> warnings;
+  const std::vector<SphereOutline> found = FindSpheresInImages(c.pointers(), {}, &warnings);
+  ASSERT_EQ(found.size(), 1u);
+  // Centre (0.2 + 1.2) * 100 = 140, (1.0 - 0.1) * 100 = 90; radius 75.
+  EXPECT_NEAR(found[0].center_x_px, 140, 0.5);
+  EXPECT_NEAR(found[0].center_y_px, 90, 0.5);
+  EXPECT_NEAR(found[0].radius_px, 75, 0.5);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0].find("no mask: found a sphere in the photos at ("), 0u) << warnings[0];
+  // A flat grey capture holds no sphere.
+  const ImageF flat(120, 100, 3, 0.4f);
+  try {
+    FindSpheresInImages({&flat, &flat, &flat}, {}, &warnings);
+    ADD_FAILURE() << "a sphere found in flat grey";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(
+        e.what(),
+        "no sphere found in the photos (no circle in their mean); give --mask or --circle");
+  }
+}
+
 TEST(CalibrateMirror, OrthographicDirectionsWithinATenthOfADegreeFor12To96Lights) {
   const Camera camera = Camera::Orthographic(256, 256, 2.0);
   const geometry::SurfaceMap surface = geometry::SampleSphere(camera, Vec3d::Zero(), 0.8);

@@ -122,16 +122,33 @@ def test_no_sphere_in_the_mask(tmp_path):
     assert snapshot(tmp_path) == before
 
 
-def test_no_mask_and_no_circle(tmp_path):
+def test_without_a_mask_the_sphere_is_found_in_the_photos(tmp_path):
     folder = capture(tmp_path / "ball", mask=False)
+    out = tmp_path / "out"
+    code, _, err = run("calibrate-lights", folder, "-o", out)
+    assert code == 0, err
+    assert err.startswith("iphong: warning: ") and "ball: no mask: found a sphere in the photos " \
+        "at (47.9, 47.9), radius 40.0 px; check calibration.png, or give --mask or --circle" in err
+    directions = [list(map(float, line.split()))
+                  for line in (out / "light_directions.txt").read_text().splitlines()]
+    # A circle 0.1 px off on a 40 px sphere moves the lights by up to half a degree.
+    for found, truth in zip(directions, LIGHTS):
+        assert angle_deg(found, truth) < 0.8, (found, truth)
+    # The circle given by hand does the same job as a mask.
+    code, _, err = run("calibrate-lights", folder, "-o", tmp_path / "out2",
+                       "--circle", f"{CX},{CY},{RADIUS}", "-q")
+    assert code == 0 and not err, err
+
+
+def test_no_sphere_in_the_photos(tmp_path):
+    grey = png(SIZE, SIZE, [bytes([90] * 3 * SIZE)] * SIZE, 3)
+    folder = capture(tmp_path / "flat", images={j: grey for j in range(6)}, mask=False)
+    before = snapshot(tmp_path)
     code, _, err = run("calibrate-lights", folder, "-o", tmp_path / "out")
     assert_one_line_error(code, err, 1,
-                          r"ball: no sphere mask \(mask\.png, NAME\.mask\.\*\): give --mask or "
-                          r"--circle cx,cy,r$")
-    # The circle given by hand does the same job as the mask.
-    code, _, err = run("calibrate-lights", folder, "-o", tmp_path / "out",
-                       "--circle", f"{CX},{CY},{RADIUS}", "-q")
-    assert code == 0, err
+                          r"flat: no sphere found in the photos \(no circle in their mean\); "
+                          r"give --mask or --circle$")
+    assert snapshot(tmp_path) == before
 
 
 def test_sphere_clipped_by_the_image_edge(tmp_path):
