@@ -14,6 +14,26 @@
 namespace iphong::solve {
 namespace {
 
+// Reports the fraction of the iteration budget spent, within [start, start + span].
+class ProgressCallback : public ceres::IterationCallback {
+ public:
+  ProgressCallback(std::function<void(double)> report, double start, double span, int budget)
+      : report_(std::move(report)), start_(start), span_(span), budget_(std::max(budget, 1)) {}
+  void Stage(double start, double span) {
+    start_ = start;
+    span_ = span;
+  }
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    if (report_) report_(start_ + span_ * std::min(1.0, (summary.iteration + 1.0) / budget_));
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  std::function<void(double)> report_;
+  double start_, span_;
+  int budget_;
+};
+
 using internal::Luminance;
 
 // Image j's shading at one pixel through the shared model, against the observation.
@@ -199,10 +219,14 @@ FewImageResult EstimateNormalsFewImages(const PhotometricData& data,
   solver.max_num_iterations = options.max_iterations;
   solver.num_threads = ResolveThreads(options.threads);
   ceres::Solver::Summary summary;
+  // A run on a camera-sized image takes minutes: its progress is the iteration budget spent.
+  ProgressCallback progress(options.progress, 0.0, 0.2, options.max_iterations);
+  if (options.progress) solver.callbacks.push_back(&progress);
 
   // Stage 1: the priors alone inflate the silhouette into a smooth start.
   add_priors(priors_only);
   ceres::Solve(solver, &priors_only, &summary);
+  progress.Stage(0.2, 0.8);
   int iterations = static_cast<int>(summary.iterations.size());
 
   // Stage 2: everything, with the data of the shared model.
@@ -221,6 +245,7 @@ FewImageResult EstimateNormalsFewImages(const PhotometricData& data,
   }
   ceres::Solve(solver, &full, &summary);
   iterations += static_cast<int>(summary.iterations.size());
+  if (options.progress) options.progress(1.0);
 
   FewImageResult result;
   result.normals = ImageF(w, h, 3);

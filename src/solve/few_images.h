@@ -12,6 +12,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <string>
 
 #include "reflectance/material.h"
@@ -33,6 +34,9 @@ struct FewImageOptions {
   double boundary_weight = 2.0;
   int max_iterations = 200;
   int threads = 0;
+  // Called from the solving thread after each iteration with the fraction of the iteration
+  // budget spent (the priors' stage counts a fifth): the solve may converge before 1.
+  std::function<void(double)> progress;
 
   std::string Validate() const;
 };

@@ -280,6 +280,7 @@ NormalResult RecoverNormals(const PhotometricData& data, const NormalOptions& op
   few.material.shininess = options.shininess;
   few.ambient_term = options.ambient_term;
   few.threads = options.threads;
+  few.progress = options.progress;
   const FewImageResult r = EstimateNormalsFewImages(data, few);
   NormalResult result;
   result.model = options.model;

@@ -1,7 +1,9 @@
 // Seed 003's inverse example: one light, two solutions per profile pixel, priors pick the truth.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include "geometry/primitives.h"
 #include "render/renderer.h"
@@ -48,7 +50,8 @@ struct FewImageCase {
 };
 
 FewImageCase RenderAndSolve(int width, int height, const std::vector<Vec3d>& light_dirs,
-                            geometry::TriangleMesh mesh, const Vec3d& kd) {
+                            geometry::TriangleMesh mesh, const Vec3d& kd,
+                            std::function<void(double)> progress = {}) {
   render::Scene scene;
   scene.camera = geometry::Camera::Orthographic(width, height, 2.0);
   for (const Vec3d& d : light_dirs)
@@ -68,6 +71,7 @@ FewImageCase RenderAndSolve(int width, int height, const std::vector<Vec3d>& lig
   }
   FewImageOptions o;
   o.material.kd = kd;
+  o.progress = std::move(progress);
   c.result = EstimateNormalsFewImages(
       GatherObservations(images, width, height, c.out.mask, dirs, intensities), o);
   return c;
@@ -121,6 +125,20 @@ TEST(FewImages, SphereFromTwoImages) {
   std::printf("sphere, two lights: mean %.2f deg, median %.2f deg\n", e.mean_deg, e.median_deg);
   EXPECT_LT(e.median_deg, 3.0);
   EXPECT_LT(e.mean_deg, 6.0);
+}
+
+TEST(FewImages, ReportsProgressThroughBothStages) {
+  // One- and two-image runs on camera-sized photos take minutes: they must show progress.
+  std::vector<double> reported;
+  RenderAndSolve(32, 32, {Vec3d(0.5, 0.3, 0.8), Vec3d(-0.4, -0.2, 0.9)},
+                 geometry::MakeSphere(0.85, 4), Vec3d(0.6, 0.5, 0.4),
+                 [&](double f) { reported.push_back(f); });
+  ASSERT_GE(reported.size(), 3u);
+  EXPECT_GT(reported.front(), 0.0);
+  EXPECT_LE(reported.front(), 0.2);  // the priors' stage first
+  for (std::size_t i = 1; i < reported.size(); ++i) EXPECT_GE(reported[i], reported[i - 1]);
+  EXPECT_EQ(reported.back(), 1.0);
+  EXPECT_GT(*std::upper_bound(reported.begin(), reported.end(), 0.2), 0.2);  // the data stage
 }
 
 TEST(FewImages, RequiresAKnownAlbedoAndAtMostTwoImages) {
