@@ -8,6 +8,7 @@
 #include "calibrate/lights.h"
 #include "core/parallel.h"
 #include "core/timing.h"
+#include "reflectance/phong.h"
 
 namespace iphong::calibrate {
 namespace {
@@ -24,8 +25,9 @@ double AngleDeg(const Vec3d& a, const Vec3d& b) {
   return kDeg * std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
-Vec3d Reflect(const Vec3d& normal, const Vec3d& view) {
-  return 2 * normal.dot(view) * normal - view;
+// The light a mirror shows at a normal: the model's reflection of the view.
+Vec3d MirrorLight(const Vec3d& normal, const Vec3d& view) {
+  return reflectance::Reflect(normal, normal.dot(view), view);
 }
 
 Highlight FindHighlight(const ImageF& image, const SphereGeometry& sphere,
@@ -118,7 +120,7 @@ Highlight FindHighlight(const ImageF& image, const SphereGeometry& sphere,
       const double x = c0 + c + 0.5, y = r0 + r + 0.5;
       Vec3d normal, view, point;
       if (!sphere.At(x, y, &normal, &view, &point)) continue;
-      const Vec3d dir = Reflect(normal, view);
+      const Vec3d dir = MirrorLight(normal, view);
       samples.push_back({dir, w});
       sum_dir += w * dir;
       sum_w += w;
@@ -150,7 +152,7 @@ Highlight FindHighlight(const ImageF& image, const SphereGeometry& sphere,
   int steps = 0;
   for (const Vec2d& d : {Vec2d(1, 0), Vec2d(0, 1), Vec2d(-1, 0), Vec2d(0, -1)}) {
     if (sphere.At(h.x_px + d.x(), h.y_px + d.y(), &n1, &v1, &p1)) {
-      footprint += AngleDeg(Reflect(n1, v1), Reflect(normal, view));
+      footprint += AngleDeg(MirrorLight(n1, v1), MirrorLight(normal, view));
       ++steps;
     }
   }

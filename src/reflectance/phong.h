@@ -128,6 +128,13 @@ T LobePower(const T& cosine, const T& lambda, const T& shininess, const ModelOpt
   return exp(shininess * log(cosine));
 }
 
+// The mirror image of the unit direction `v` about the unit normal, 2(N·v)N − v, given N·v: the
+// model's R for v = L, and the light a mirror sphere shows at N for v = V (calibrate/).
+template <typename T, typename V>
+Vec3T<T> Reflect(const Vec3T<T>& normal_cam, const T& normal_dot_v, const V& v) {
+  return T(2) * normal_dot_v * normal_cam - v;
+}
+
 // The specular lobe value (R·V)^n or (N·H)^n for one light, zero where seed 003's rules say so
 // (N·L ≤ 0, or the lobe's cosine ≤ 0). All vectors unit, camera frame. The view and light may
 // have a plain scalar type D while the normal is a Jet (SpecularLobe<Jet, double>): constants
@@ -141,7 +148,7 @@ T SpecularLobe(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam
   const T n_dot_l = normal_cam.dot(light_dir_cam);
   if (!(n_dot_l > T(0))) return T(0);
   if (options.lobe == Lobe::kPhong) {
-    const Vec3T<T> reflect_cam = T(2) * n_dot_l * normal_cam - light_dir_cam;
+    const Vec3T<T> reflect_cam = Reflect(normal_cam, n_dot_l, light_dir_cam);
     const T cosine = reflect_cam.dot(view_cam);
     if (!(cosine > T(0))) return T(0);
     // λ feeds only the fast approximation; the exact power would waste a Jet product on it.
