@@ -7,6 +7,7 @@
 #include "core/timing.h"
 #include "io/calibration_picture.h"
 #include "io/dataset.h"
+#include "io/dataset_text.h"
 #include "io/files.h"
 #include "io/image_io.h"
 #include "io/output_folder.h"
@@ -30,16 +31,6 @@ struct CalibrateOptions {
   CaptureFlags capture;
   CommonOptions common;
 };
-
-std::string Triples(const std::vector<Vec3d>& rows) {
-  std::string text;
-  char line[128];
-  for (const Vec3d& v : rows) {
-    std::snprintf(line, sizeof line, "%.6f %.6f %.6f\n", v.x(), v.y(), v.z());
-    text += line;
-  }
-  return text;
-}
 
 nlohmann::json Vector(const Vec3d& v) { return {v.x(), v.y(), v.z()}; }
 
@@ -262,17 +253,11 @@ void RunCalibrate(const CalibrateOptions& o) {
   report["per_image"] = per_image;
   picture.light_dir_cam = directions;
 
-  io::WriteTextFile(out.file("light_directions.txt"), Triples(directions));
-  io::WriteTextFile(out.file("light_intensities.txt"), Triples(intensities));
-  if (!positions.empty()) io::WriteTextFile(out.file("light_positions.txt"), Triples(positions));
-  std::string lp = std::to_string(k) + "\n";
-  for (std::size_t j = 0; j < k; ++j) {
-    char line[64];
-    std::snprintf(line, sizeof line, " %.6f %.6f %.6f\n", directions[j].x(), directions[j].y(),
-                  directions[j].z());
-    lp += dataset.filenames[j] + line;
-  }
-  io::WriteTextFile(out.file("lights.lp"), lp);
+  io::WriteTextFile(out.file("light_directions.txt"), io::FormatTriples(directions));
+  io::WriteTextFile(out.file("light_intensities.txt"), io::FormatTriples(intensities));
+  if (!positions.empty())
+    io::WriteTextFile(out.file("light_positions.txt"), io::FormatTriples(positions));
+  io::WriteTextFile(out.file("lights.lp"), io::FormatLp(dataset.filenames, directions));
   io::WriteImage(out.file("calibration.png"), io::CalibrationPicture(picture));
   report["total_seconds"] = SecondsSince(start);
   io::WriteTextFile(out.file("calibration.json"), report.dump(2) + "\n");

@@ -9,6 +9,7 @@
 #include "core/timing.h"
 #include "integrate/integrate.h"
 #include "io/dataset.h"
+#include "io/dataset_text.h"
 #include "io/files.h"
 #include "io/image_io.h"
 #include "io/output_folder.h"
@@ -222,13 +223,8 @@ void RunNormals(const NormalsCommandOptions& o) {
     io::WriteTextFile(out.file("material.json"), material.dump(2) + "\n");
   }
   if (estimated) {
-    std::string text;
-    char line[96];
-    for (const Vec3d& e : estimated->light_intensities) {
-      std::snprintf(line, sizeof line, "%.6f %.6f %.6f\n", e.x(), e.y(), e.z());
-      text += line;
-    }
-    io::WriteTextFile(out.file("light_intensities.txt"), text);
+    io::WriteTextFile(out.file("light_intensities.txt"),
+                      io::FormatTriples(estimated->light_intensities));
   }
   if (errors)
     io::WriteErrorMap(out.file("error.png"), errors->error_deg, dataset.mask,

@@ -55,16 +55,6 @@ ImageF ReadDatasetImage(const std::string& path, int width, int height,
   }));
 }
 
-std::string Triples(const std::vector<Vec3d>& values) {
-  std::string text;
-  char line[128];
-  for (const Vec3d& v : values) {
-    std::snprintf(line, sizeof line, "%.9g %.9g %.9g\n", v[0], v[1], v[2]);
-    text += line;
-  }
-  return text;
-}
-
 ImageF MaskImage(const Mask& mask) {
   ImageF image(mask.width, mask.height, 1);
   for (std::size_t p = 0; p < mask.inside.size(); ++p) image.pixels[p] = mask.inside[p] ? 1.0f : 0;
@@ -511,10 +501,10 @@ void WriteDatasetFiles(OutputFolder& out, const std::string& prefix, const Datas
     if (d.progress) d.progress((j + 1.0) / k);
   }
   WriteTextFile(file("filenames.txt"), names);
-  WriteTextFile(file("light_directions.txt"), Triples(d.light_directions));
+  WriteTextFile(file("light_directions.txt"), FormatTriples(d.light_directions));
   WriteTextFile(file("light_intensities.txt"),
-                Triples(d.light_intensities.empty() ? std::vector<Vec3d>(k, Vec3d::Ones())
-                                                    : d.light_intensities));
+                FormatTriples(d.light_intensities.empty() ? std::vector<Vec3d>(k, Vec3d::Ones())
+                                                          : d.light_intensities));
   WriteImage(file("mask.png"), MaskImage(mask), {8, Encoding::kLinear});
   if (d.normal_gt) {
     WriteImage(file("normals.exr"), *d.normal_gt);

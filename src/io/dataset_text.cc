@@ -82,6 +82,32 @@ std::vector<std::string> ParseFilenames(const std::string& text, const std::stri
   return names;
 }
 
+std::string FormatTriples(const std::vector<Vec3d>& rows) {
+  std::string text;
+  char line[128];
+  for (const Vec3d& v : rows) {
+    std::snprintf(line, sizeof line, "%.9g %.9g %.9g\n", v[0], v[1], v[2]);
+    text += line;
+  }
+  return text;
+}
+
+std::string FormatLp(const std::vector<std::string>& names, const std::vector<Vec3d>& directions) {
+  if (names.size() != directions.size()) {
+    throw std::invalid_argument("FormatLp: " + std::to_string(names.size()) + " names, " +
+                                std::to_string(directions.size()) + " directions");
+  }
+  std::string text = std::to_string(names.size()) + "\n";
+  const std::string rows = FormatTriples(directions);
+  std::size_t start = 0;
+  for (const std::string& name : names) {
+    const std::size_t end = rows.find('\n', start) + 1;
+    text += name + " " + rows.substr(start, end - start);
+    start = end;
+  }
+  return text;
+}
+
 std::vector<Vec3d> ParseTriples(const std::string& text, const std::string& source,
                                 std::size_t expected, const std::string& count_source) {
   std::vector<Vec3d> triples;

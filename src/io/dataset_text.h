@@ -32,6 +32,12 @@ std::vector<Vec3d> ParseTriples(const std::string& text, const std::string& sour
                                 std::size_t expected,
                                 const std::string& count_source = "filenames.txt");
 
+// What ParseTriples and ParseLightFile read back: "x y z" per line (%.9g), as in
+// light_directions.txt, light_intensities.txt and light_positions.txt; and an RTI .lp, the
+// count and then "name lx ly lz" per image (the same number of names and directions).
+std::string FormatTriples(const std::vector<Vec3d>& rows);
+std::string FormatLp(const std::vector<std::string>& names, const std::vector<Vec3d>& directions);
+
 // A light file in any of the formats capture tools write, told apart by extension and content:
 //   "directions"          DiLiGenT's light_directions.txt: one "lx ly lz" per line;
 //   "count + directions"  UW/CSE455 lights.txt: a line with the count, then the directions;

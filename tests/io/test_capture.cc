@@ -53,6 +53,23 @@ TEST(NaturalOrder, NumbersCompareAsNumbers) {
                                       "cat.10.tga", "cat.mask.tga", "IMG_0009.JPG", "img_10.jpg"}));
 }
 
+TEST(LightFiles, WhatIsWrittenReadsBack) {
+  const std::vector<Vec3d> directions = {Vec3d(0.123456789, -0.5, 0.857), Vec3d(1e-7, 0.6, 0.8),
+                                         Vec3d(0, 0, 1)};
+  const std::vector<std::string> names = {"chrome.0.tga", "IMG 02.jpg", "003.png"};
+  const LightFile lp = ParseLightFile(FormatLp(names, directions), "lights.lp", 0, nullptr);
+  EXPECT_EQ(lp.format, "RTI .lp");
+  EXPECT_EQ(lp.image_names, names);
+  const std::vector<Vec3d> triples =
+      ParseTriples(FormatTriples(directions), "light_directions.txt", 3);
+  for (std::size_t j = 0; j < 3; ++j) {
+    // Unit after reading (the readers normalize); 9 significant digits survive the text.
+    EXPECT_LT((lp.directions[j] - directions[j].normalized()).norm(), 1e-8);
+    EXPECT_LT((triples[j] - directions[j]).norm(), 1e-8);
+  }
+  EXPECT_THROW(FormatLp({"a.png"}, directions), std::invalid_argument);
+}
+
 TEST(LightFiles, EveryFormatGivesTheSameDirections) {
   const std::string plain = "0 0 1\n0.6 0 0.8\n0 0.6 0.8\n";
   const LightFile a = ParseLightFile(plain, "light_directions.txt", 0, nullptr);
