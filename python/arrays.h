@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/types.h"
+#include "solve/photometric_data.h"
 
 namespace iphong::python {
 
@@ -164,6 +165,41 @@ inline ImageF ToImage(const py::object& value, const char* what) {
   ImageF image(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)), 3);
   std::memcpy(image.pixels.data(), a.data(), image.pixels.size() * sizeof(float));
   return image;
+}
+
+using FloatStack = py::array_t<float, py::array::c_style | py::array::forcecast>;
+
+// Images (K, H, W, 3) as one float array.
+inline FloatStack ToImageStack(const py::object& value) {
+  FloatStack a = FloatStack::ensure(value);
+  if (!a) PyErr_Clear();
+  if (!a || a.ndim() != 4 || a.shape(3) != 3 || a.shape(0) < 1) {
+    throw std::invalid_argument("images must have shape (K, H, W, 3)");
+  }
+  return a;
+}
+
+// K light directions (K, 3), each finite, non-zero and returned unit.
+inline std::vector<Vec3d> ToDirections(const py::object& value, std::size_t k) {
+  std::vector<Vec3d> dirs = ToRows(value, k, "light_directions");
+  for (Vec3d& d : dirs) {
+    if (!(d.norm() > 0) || !d.allFinite())
+      throw std::invalid_argument("zero or non-finite light direction");
+    d.normalize();
+  }
+  return dirs;
+}
+
+// The masked pixels of a stack under its lights, as the solvers take them.
+inline solve::PhotometricData ToObservations(const FloatStack& images,
+                                             const std::vector<Vec3d>& directions,
+                                             const std::vector<Vec3d>& intensities,
+                                             const py::object& mask) {
+  const std::size_t k = images.shape(0);
+  const int h = static_cast<int>(images.shape(1)), w = static_cast<int>(images.shape(2));
+  std::vector<const float*> pointers;
+  for (std::size_t j = 0; j < k; ++j) pointers.push_back(images.data() + j * h * w * 3);
+  return solve::GatherObservations(pointers, w, h, ToMask(mask, w, h), directions, intensities);
 }
 
 }  // namespace iphong::python

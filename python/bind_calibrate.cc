@@ -12,16 +12,11 @@ namespace py = pybind11;
 namespace iphong::python {
 namespace {
 
-using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
-
 // (K, H, W, 3) float images, as ImageF (copies: the calibrations read them whole).
 std::vector<ImageF> ToImages(const py::object& value) {
-  FloatArray a = FloatArray::ensure(value);
-  if (!a || a.ndim() != 4 || a.shape(3) != 3) {
-    throw std::invalid_argument("images must have shape (K, H, W, 3)");
-  }
+  const FloatStack a = ToImageStack(value);
   const int k = int(a.shape(0)), h = int(a.shape(1)), w = int(a.shape(2));
-  if (k < 1 || h < 1 || w < 1) throw std::invalid_argument("images: empty array");
+  if (h < 1 || w < 1) throw std::invalid_argument("images: empty array");
   std::vector<ImageF> images(k, ImageF(w, h, 3));
   for (int j = 0; j < k; ++j) {
     std::copy(a.data() + std::size_t(j) * h * w * 3, a.data() + std::size_t(j + 1) * h * w * 3,
@@ -221,22 +216,11 @@ None; residual and pixels_used per light. Raises ValueError when an image has no
       "estimate_intensities",
       [](const py::object& images_in, const py::object& light_directions, const py::object& mask_in,
          double discard_dark, double discard_bright, int threads) {
-        FloatArray images = FloatArray::ensure(images_in);
-        if (!images || images.ndim() != 4 || images.shape(3) != 3) {
-          throw std::invalid_argument("images must have shape (K, H, W, 3)");
-        }
+        const FloatStack images = ToImageStack(images_in);
         const std::size_t k = images.shape(0);
-        const int h = int(images.shape(1)), w = int(images.shape(2));
-        std::vector<Vec3d> dirs = ToRows(light_directions, k, "light_directions");
-        for (Vec3d& d : dirs) {
-          if (!(d.norm() > 0) || !d.allFinite())
-            throw std::invalid_argument("zero or non-finite light direction");
-          d.normalize();
-        }
-        std::vector<const float*> pointers;
-        for (std::size_t j = 0; j < k; ++j) pointers.push_back(images.data() + j * h * w * 3);
-        const solve::PhotometricData data = solve::GatherObservations(
-            pointers, w, h, ToMask(mask_in, w, h), dirs, std::vector<Vec3d>(k, Vec3d::Ones()));
+        const solve::PhotometricData data =
+            ToObservations(images, ToDirections(light_directions, k),
+                           std::vector<Vec3d>(k, Vec3d::Ones()), mask_in);
         calibrate::IntensityOptions options;
         options.discard_dark = discard_dark;
         options.discard_bright = discard_bright;

@@ -140,10 +140,7 @@ void BindIo(py::module_& m) {
          const py::object& light_directions, const py::object& light_intensities,
          const py::object& mask_in, const py::object& normal_gt_in, const std::string& format,
          int bits, bool overwrite) {
-        auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(images_in);
-        if (!a || a.ndim() != 4 || a.shape(3) != 3) {
-          throw std::invalid_argument("images must have shape (K, H, W, 3)");
-        }
+        const FloatStack a = ToImageStack(images_in);
         const std::size_t k = a.shape(0);
         const int h = static_cast<int>(a.shape(1)), w = static_cast<int>(a.shape(2));
         std::vector<ImageF> images(k, ImageF(w, h, 3));

@@ -13,12 +13,6 @@
 namespace py = pybind11;
 
 namespace iphong::python {
-namespace {
-
-using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
-
-}  // namespace
-
 void BindSolve(py::module_& m) {
   m.def(
       "estimate_normals",
@@ -26,26 +20,13 @@ void BindSolve(py::module_& m) {
          const py::object& light_intensities, const py::object& mask_in, const py::object& model,
          const py::object& material, double discard_dark, double discard_bright, bool fast,
          double shadow_threshold, int threads) {
-        FloatArray images = FloatArray::ensure(images_in);
-        if (!images || images.ndim() != 4 || images.shape(3) != 3) {
-          throw std::invalid_argument("images must have shape (K, H, W, 3)");
-        }
+        const FloatStack images = ToImageStack(images_in);
         const std::size_t k = images.shape(0);
-        const int h = static_cast<int>(images.shape(1)), w = static_cast<int>(images.shape(2));
-        std::vector<Vec3d> dirs = ToRows(light_directions, k, "light_directions");
-        for (Vec3d& d : dirs) {
-          if (!(d.norm() > 0) || !d.allFinite())
-            throw std::invalid_argument("zero or non-finite light direction");
-          d.normalize();
-        }
         const std::vector<Vec3d> intensities =
             light_intensities.is_none() ? std::vector<Vec3d>(k, Vec3d::Ones())
                                         : ToRows(light_intensities, k, "light_intensities");
-        const Mask mask = ToMask(mask_in, w, h);
-        std::vector<const float*> pointers;
-        for (std::size_t j = 0; j < k; ++j) pointers.push_back(images.data() + j * h * w * 3);
         const solve::PhotometricData data =
-            solve::GatherObservations(pointers, w, h, mask, dirs, intensities);
+            ToObservations(images, ToDirections(light_directions, k), intensities, mask_in);
         solve::NormalOptions options;
         const bool model_given = !model.is_none();
         if (model_given) {
