@@ -5,6 +5,7 @@ and a light behind the sphere (warnings: the calibration is written)."""
 import json
 import math
 import os
+import re
 import pathlib
 import struct
 import zlib
@@ -37,25 +38,35 @@ def unit(v):
     return [x / n for x in v]
 
 
-def mirror_image(light, half_width_deg=4.0, gain=0.8, cx=CX):
-    """A mirror ball under a small round source: a Gaussian highlight in directions, its peak
-    `gain` (above 1 the centre is clipped)."""
+def mirror_images(light, width=SIZE, centres=(CX,), radius=RADIUS, half_width_deg=4.0,
+                  gain=0.8):
+    """Mirror balls (centres along the middle row) under one small round source, drawn with the
+    reflection written out here, independently of iphong: a Gaussian highlight in directions,
+    its peak `gain` (above 1 the centre is clipped). The picture and the balls' mask."""
     light = unit(light)
-    rows = []
+    rows, mask = [], []
     for r in range(SIZE):
-        row = bytearray()
-        for c in range(SIZE):
-            dx, dy = (c + 0.5 - cx) / RADIUS, -(r + 0.5 - CY) / RADIUS
-            value = 0.0
-            if dx * dx + dy * dy < 1:
-                nz = math.sqrt(1 - dx * dx - dy * dy)
-                reflected = [2 * nz * dx, 2 * nz * dy, 2 * nz * nz - 1]
-                cos = max(-1.0, min(1.0, sum(a * b for a, b in zip(reflected, light))))
-                angle = math.degrees(math.acos(cos))
-                value = 0.02 + gain * math.exp(-0.5 * (angle / half_width_deg) ** 2)
+        row, inside = bytearray(), bytearray()
+        for c in range(width):
+            value, on = 0.0, 0
+            for cx in centres:
+                dx, dy = (c + 0.5 - cx) / radius, -(r + 0.5 - CY) / radius
+                if dx * dx + dy * dy < 1:
+                    nz = math.sqrt(1 - dx * dx - dy * dy)
+                    reflected = [2 * nz * dx, 2 * nz * dy, 2 * nz * nz - 1]
+                    cos = max(-1.0, min(1.0, sum(a * b for a, b in zip(reflected, light))))
+                    angle = math.degrees(math.acos(cos))
+                    value = 0.02 + gain * math.exp(-0.5 * (angle / half_width_deg) ** 2)
+                    on = 255
             row += bytes([min(255, round(255 * value))] * 3)
+            inside.append(on)
         rows.append(bytes(row))
-    return png(SIZE, SIZE, rows, 3)
+        mask.append(bytes(inside))
+    return png(width, SIZE, rows, 3), png(width, SIZE, mask, 1)
+
+
+def mirror_image(light, half_width_deg=4.0, gain=0.8, cx=CX):
+    return mirror_images(light, centres=(cx,), half_width_deg=half_width_deg, gain=gain)[0]
 
 
 def disc_mask(cx=CX, radius=RADIUS):
@@ -107,8 +118,7 @@ def test_mirror_capture_gives_the_lights_the_files_and_the_picture(tmp_path):
         highlight = entry["highlights"][0]
         assert angle_deg(entry["light_direction"], truth) < highlight["uncertainty_deg"] < 0.4
     assert (out / "calibration.png").stat().st_size > 1000
-    # The result feeds `iphong normals --lights` as any light file does.
-    assert not err
+    assert not err  # nothing to warn about: unclipped highlights, distinct lights
 
 
 def test_no_sphere_in_the_mask(tmp_path):
@@ -127,8 +137,12 @@ def test_without_a_mask_the_sphere_is_found_in_the_photos(tmp_path):
     out = tmp_path / "out"
     code, _, err = run("calibrate-lights", folder, "-o", out)
     assert code == 0, err
-    assert err.startswith("iphong: warning: ") and "ball: no mask: found a sphere in the photos " \
-        "at (47.9, 47.9), radius 40.0 px; check calibration.png, or give --mask or --circle" in err
+    found = re.search(r"^iphong: warning: .*ball: no mask: found a sphere in the photos at "
+                      r"\((\S+), (\S+)\), radius (\S+) px; check calibration\.png, or give "
+                      r"--mask or --circle$", err, re.M)
+    assert found, err
+    # The drawn sphere: centre (48, 48), radius 40.
+    assert [abs(float(v) - t) < 0.3 for v, t in zip(found.groups(), (CX, CY, RADIUS))] == [True] * 3
     directions = [list(map(float, line.split()))
                   for line in (out / "light_directions.txt").read_text().splitlines()]
     # A circle 0.1 px off on a 40 px sphere moves the lights by up to half a degree.
@@ -265,33 +279,11 @@ def test_normals_that_light_no_pixel_are_an_error(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
-def two_sphere_image(light, width=176, centres=(44.0, 132.0), radius=36.0):
-    """Two mirror balls side by side under one distant light."""
-    light = unit(light)
-    rows = []
-    for r in range(SIZE):
-        row = bytearray()
-        for c in range(width):
-            value = 0.0
-            for cx in centres:
-                dx, dy = (c + 0.5 - cx) / radius, -(r + 0.5 - CY) / radius
-                if dx * dx + dy * dy < 1:
-                    nz = math.sqrt(1 - dx * dx - dy * dy)
-                    reflected = [2 * nz * dx, 2 * nz * dy, 2 * nz * nz - 1]
-                    cos = max(-1.0, min(1.0, sum(a * b for a, b in zip(reflected, light))))
-                    value = 0.02 + 0.8 * math.exp(-0.5 * (math.degrees(math.acos(cos)) / 4) ** 2)
-            row += bytes([min(255, round(255 * value))] * 3)
-        rows.append(bytes(row))
-    mask = [bytes(255 if any(((c + 0.5 - cx) ** 2 + (r + 0.5 - CY) ** 2) < radius ** 2
-                             for cx in centres) else 0 for c in range(width)) for r in range(SIZE)]
-    return png(width, SIZE, rows, 3), png(width, SIZE, mask, 1)
-
-
 def test_two_spheres_under_distant_lights(tmp_path):
     folder = tmp_path / "rig"
     folder.mkdir()
     for j, light in enumerate(LIGHTS):
-        image, mask = two_sphere_image(light)
+        image, mask = mirror_images(light, width=176, centres=(44.0, 132.0), radius=36.0)
         (folder / f"rig.{j + 1}.png").write_bytes(image)
     (folder / "mask.png").write_bytes(mask)
     out = tmp_path / "lights"

@@ -10,8 +10,10 @@ GRAY = DATA / "uw" / "gray"
 needs_uw = pytest.mark.skipif(not GRAY.is_dir(), reason=f"UW data not found at {GRAY}")
 
 
-def sphere_normals(mask):
-    """The sphere seen by an orthographic camera, fitted to the mask's outline (least squares)."""
+def fit_circle(mask):
+    """(cx, cy, r) in pixels of the circle through the centres of the mask's boundary pixels
+    (algebraic least squares): independent of iphong's own sphere finder, and about half a pixel
+    small, since boundary pixels sit inside the edge."""
     inner = mask.copy()
     inner[1:-1, 1:-1] = (mask[1:-1, 1:-1] & mask[:-2, 1:-1] & mask[2:, 1:-1] & mask[1:-1, :-2]
                          & mask[1:-1, 2:])
@@ -19,7 +21,12 @@ def sphere_normals(mask):
     xs, ys = xs + 0.5, ys + 0.5
     a = np.c_[2 * xs, 2 * ys, np.ones_like(xs)]
     cx, cy, c = np.linalg.lstsq(a, xs ** 2 + ys ** 2, rcond=None)[0]
-    r = np.sqrt(c + cx ** 2 + cy ** 2)
+    return cx, cy, np.sqrt(c + cx ** 2 + cy ** 2)
+
+
+def sphere_normals(mask):
+    """The sphere seen by an orthographic camera, fitted to the mask's outline (least squares)."""
+    cx, cy, r = fit_circle(mask)
     h, w = mask.shape
     x, y = np.meshgrid(np.arange(w) + 0.5, np.arange(h) + 0.5)
     nx, ny = (x - cx) / r, -(y - cy) / r
