@@ -60,25 +60,25 @@ KnownNormalCalibration CalibrateFromNormals(const std::vector<const ImageF*>& im
     throw std::invalid_argument("only " + std::to_string(count) +
                                 " pixels have a normal inside the mask; 10 or more are needed");
   }
-  std::vector<float> rgb(count * k * 3);
+  // Light-major: each light's fit walks all pixels, which is most of the work.
+  auto at = [count](std::size_t i, int j) { return std::size_t(j) * count + i; };
+  std::vector<float> rgb(count * k * 3), luminance(count * k);
   std::vector<unsigned char> clipped(count * k);
-  for (std::size_t i = 0; i < count; ++i) {
-    for (int j = 0; j < k; ++j) {
-      const ImageF& image = *images[j];
+  for (int j = 0; j < k; ++j) {
+    const ImageF& image = *images[j];
+    for (std::size_t i = 0; i < count; ++i) {
       const float* v = image.pixels.data() + index[i] * image.channels;
       bool clip = false;
       for (int c = 0; c < 3; ++c) {
         const float x = v[std::min(c, image.channels - 1)];
-        rgb[(i * k + j) * 3 + c] = x;
+        rgb[at(i, j) * 3 + c] = x;
         clip |= !(x < options.saturation);
       }
-      clipped[i * k + j] = clip;
+      clipped[at(i, j)] = clip;
+      luminance[at(i, j)] = (rgb[at(i, j) * 3] + rgb[at(i, j) * 3 + 1] + rgb[at(i, j) * 3 + 2]) / 3;
     }
   }
-  auto lum = [&](std::size_t i, int j) {
-    const float* v = &rgb[(i * k + j) * 3];
-    return (double(v[0]) + v[1] + v[2]) / 3;
-  };
+  auto lum = [&](std::size_t i, int j) { return double(luminance[at(i, j)]); };
 
   KnownNormalCalibration result;
   std::vector<double> albedo(count, 1.0);
@@ -91,17 +91,17 @@ KnownNormalCalibration CalibrateFromNormals(const std::vector<const ImageF*>& im
     if (first) {  // no direction yet: the brighter observations are lit
       std::vector<double> y;
       for (std::size_t i = 0; i < count; ++i)
-        if (!clipped[i * k + j]) y.push_back(lum(i, j) / albedo[i]);
+        if (!clipped[at(i, j)]) y.push_back(lum(i, j) / albedo[i]);
       std::nth_element(y.begin(), y.begin() + y.size() * 95 / 100, y.end());
       const double bright = y.empty() ? 0 : y[y.size() * 95 / 100];
       for (std::size_t i = 0; i < count; ++i)
-        weight[i * k + j] = !clipped[i * k + j] && lum(i, j) / albedo[i] > 0.2 * bright;
+        weight[at(i, j)] = !clipped[at(i, j)] && lum(i, j) / albedo[i] > 0.2 * bright;
     }
     for (int step = 0; step < 4; ++step) {
       Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
       Eigen::Vector3d atb = Eigen::Vector3d::Zero();
       for (std::size_t i = 0; i < count; ++i) {
-        const double wi = weight[i * k + j];
+        const double wi = weight[at(i, j)];
         if (wi <= 0) continue;
         ata += wi * normals[i] * normals[i].transpose();
         atb += wi * normals[i] * (lum(i, j) / albedo[i]);
@@ -113,15 +113,15 @@ KnownNormalCalibration CalibrateFromNormals(const std::vector<const ImageF*>& im
       const Vec3d l = b[j] / scale;
       std::vector<double> abs_res;
       for (std::size_t i = 0; i < count; ++i) {
-        if (clipped[i * k + j] || normals[i].dot(l) <= options.min_cos) continue;
+        if (clipped[at(i, j)] || normals[i].dot(l) <= options.min_cos) continue;
         abs_res.push_back(std::abs(lum(i, j) / albedo[i] - normals[i].dot(b[j])));
       }
       const double sigma = std::max(1.4826 * Median(abs_res), 1e-6 * scale);
       const double c = 4.685 * sigma;
       for (std::size_t i = 0; i < count; ++i) {
-        float& wi = weight[i * k + j];
+        float& wi = weight[at(i, j)];
         wi = 0;
-        if (clipped[i * k + j] || normals[i].dot(l) <= options.min_cos) continue;
+        if (clipped[at(i, j)] || normals[i].dot(l) <= options.min_cos) continue;
         const double u = (lum(i, j) / albedo[i] - normals[i].dot(b[j])) / c;
         if (std::abs(u) < 1) wi = float((1 - u * u) * (1 - u * u));
       }
@@ -132,7 +132,7 @@ KnownNormalCalibration CalibrateFromNormals(const std::vector<const ImageF*>& im
     for (std::size_t i = 0; i < count; ++i) {
       double num = 0, den = 0;
       for (int j = 0; j < k; ++j) {
-        const double wi = weight[i * k + j], s = normals[i].dot(b[j]);
+        const double wi = weight[at(i, j)], s = normals[i].dot(b[j]);
         num += wi * lum(i, j) * s;
         den += wi * s * s;
       }
@@ -181,10 +181,10 @@ KnownNormalCalibration CalibrateFromNormals(const std::vector<const ImageF*>& im
       for (int j = 0; j < k; ++j) {
         double num = 0, den = 0;
         for (std::size_t i = 0; i < count; ++i) {
-          const double wi = weight[i * k + j];
+          const double wi = weight[at(i, j)];
           if (wi <= 0) continue;
           const double s = albedo_c[i] * normals[i].dot(result.light_dir_cam[j]);
-          num += wi * rgb[(i * k + j) * 3 + c] * s;
+          num += wi * rgb[at(i, j) * 3 + c] * s;
           den += wi * s * s;
         }
         e[j] = den > 0 ? num / den : 0;
@@ -193,9 +193,9 @@ KnownNormalCalibration CalibrateFromNormals(const std::vector<const ImageF*>& im
       for (std::size_t i = 0; i < count; ++i) {
         double num = 0, den = 0;
         for (int j = 0; j < k; ++j) {
-          const double wi = weight[i * k + j];
+          const double wi = weight[at(i, j)];
           const double s = e[j] * normals[i].dot(result.light_dir_cam[j]);
-          num += wi * rgb[(i * k + j) * 3 + c] * s;
+          num += wi * rgb[at(i, j) * 3 + c] * s;
           den += wi * s * s;
         }
         if (den > 0) albedo_c[i] = std::max(num / den, 0.0);
@@ -211,7 +211,7 @@ KnownNormalCalibration CalibrateFromNormals(const std::vector<const ImageF*>& im
   for (int j = 0; j < k; ++j) {
     double sum = 0, sum_w = 0;
     for (std::size_t i = 0; i < count; ++i) {
-      const double wi = weight[i * k + j];
+      const double wi = weight[at(i, j)];
       if (wi <= 0) continue;
       result.pixels_used[j] += 1;
       sum += wi * std::pow(lum(i, j) / albedo[i] - normals[i].dot(b[j]), 2);
