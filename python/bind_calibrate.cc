@@ -233,7 +233,7 @@ None; residual and pixels_used per light. Raises ValueError when an image has no
         py::dict out;
         out["light_intensities"] = ToArray(e.light_intensities);
         out["eigen_gap"] = e.eigen_gap;
-        out["note"] = e.note;
+        out["lambert_residual"] = e.lambert_residual;
         out["seconds"] = e.seconds;
         return out;
       },
@@ -241,8 +241,9 @@ None; residual and pixels_used per light. Raises ValueError when an image has no
       py::arg("discard_dark") = 0.3, py::arg("discard_bright") = 0.1, py::arg("threads") = 0,
       R"doc(Each light's relative RGB intensity from images under known directions
 (semi-calibrated photometric stereo; `iphong normals --estimate-intensities`). Returns
-light_intensities (K, 3), each channel's mean 1, and eigen_gap (how well determined: the second
-smallest eigenvalue over the smallest).)doc");
+light_intensities (K, 3), each channel's mean 1, eigen_gap (how well determined: the second
+smallest eigenvalue over the smallest) and lambert_residual; raises ValueError when the images are
+too far from Lambertian for the estimate (a median relative residual over 0.05).)doc");
 }
 
 }  // namespace iphong::python

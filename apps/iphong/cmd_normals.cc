@@ -121,9 +121,12 @@ void RunNormals(const NormalsCommandOptions& o) {
   if (o.estimate_intensities) {
     calibrate::IntensityOptions intensity_options;
     intensity_options.threads = o.common.threads;
-    estimated = calibrate::EstimateIntensities(loaded.observations, intensity_options);
+    try {
+      estimated = calibrate::EstimateIntensities(loaded.observations, intensity_options);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(o.dataset + ": --estimate-intensities: " + e.what());
+    }
     loaded.observations.light_intensities = estimated->light_intensities;
-    if (!estimated->note.empty()) Warn(o.dataset + ": estimating intensities: " + estimated->note);
     Say(o.common, "Estimated the %d lights' intensities in %.2f s (eigenvalue gap %.1f)\n",
         loaded.observations.images, estimated->seconds, estimated->eigen_gap);
   }
@@ -179,7 +182,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   if (estimated) {
     metrics["estimated_intensities"] = {{"seconds", estimated->seconds},
                                         {"eigen_gap", estimated->eigen_gap},
-                                        {"note", estimated->note}};
+                                        {"lambert_residual", estimated->lambert_residual}};
   }
   metrics["dark_pixels"] = result.summary.dark_pixels;
   metrics["underdetermined_pixels"] = result.summary.underdetermined_pixels;

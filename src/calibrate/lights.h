@@ -187,6 +187,9 @@ struct IntensityOptions {
   double discard_bright = 0.1;  // and its brightest (highlights)
   int rounds = 3;
   std::size_t max_pixels = 50000;  // more are subsampled evenly: K numbers need far fewer
+  // Over this median relative residual of Lambert on the kept observations, the images do not
+  // follow the model the estimate assumes, and it is refused (see intensities.cc).
+  double max_residual = 0.05;
   int threads = 0;
   std::string Check() const;
 };
@@ -195,7 +198,7 @@ struct IntensityEstimate {
   std::vector<Rgb> light_intensities;  // each channel's mean over the lights is 1
   double eigen_gap = 0;  // second smallest over smallest eigenvalue: how well determined
   int rounds = 0;
-  std::string note;  // "" or the channels left at 1 (no positive solution)
+  double lambert_residual = 0;  // median relative residual of the kept observations
   double seconds = 0;
 };
 
@@ -205,7 +208,8 @@ struct IntensityEstimate {
 // pixel keeps its middle observations (discard_dark, discard_bright) and is weighted by how well
 // Lambert explains them, 1/(r_p² + median r²), since the intensities are a per-image constant
 // best measured where the model holds. Uses data's directions, not its intensities. Throws
-// std::invalid_argument when data is invalid.
+// std::invalid_argument when data is invalid, and when the images are too far from Lambertian
+// for the estimate (no positive solution, or a residual over max_residual).
 IntensityEstimate EstimateIntensities(const solve::PhotometricData& data,
                                       const IntensityOptions& options);
 

@@ -299,3 +299,16 @@ def test_two_spheres_under_distant_lights(tmp_path):
         assert angle_deg(entry["light_direction"], truth) < 0.3
         a, b = (h["light_direction"] for h in entry["highlights"])
         assert angle_deg(a, b) < 0.5
+
+
+COW = UW.parent / "diligent-crop8" / "cow"
+
+
+@pytest.mark.skipif(not COW.is_dir(), reason=f"DiLiGenT crops not found at {COW.parent}")
+def test_estimate_intensities_refuses_a_metallic_object(tmp_path):
+    code, _, err = run("normals", COW, "--estimate-intensities", "-o", tmp_path / "out")
+    assert_one_line_error(code, err, 1,
+                          r"cow: --estimate-intensities: the images are too far from Lambertian "
+                          r"to estimate their lights' intensities \(median relative residual "
+                          r"0\.079, over 0\.05\); give the intensities$")
+    assert not (tmp_path / "out").exists()
