@@ -1,0 +1,218 @@
+// Material fitting on renders of known materials: every preset recovered, the model chosen by
+// held-out prediction, standard errors that cover the truth as often as they claim, bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "geometry/primitives.h"
+#include "material/fit.h"
+#include "reflectance/material.h"
+#include "render/renderer.h"
+
+namespace iphong::material {
+namespace {
+
+using reflectance::Light;
+using reflectance::Lobe;
+
+struct Capture {
+  solve::PhotometricData data;
+  std::vector<Vec3d> normals;  // per observed pixel
+};
+
+// A sphere under 24 hemisphere lights (elevations 30°–88°, RGB intensity (1, 0.9, 0.8)) and
+// ambient Ia, rendered per light, with Gaussian noise σ added to every value.
+Capture RenderSphere(const reflectance::Material& material, Lobe lobe, const Vec3d& ambient,
+                     double sigma = 0, int size = 64, unsigned seed = 1) {
+  render::Scene scene;
+  scene.camera = geometry::Camera::Orthographic(size, size, 2.0);
+  scene.lighting.ambient = ambient;
+  const double golden = M_PI * (3 - std::sqrt(5.0));
+  const int lights = 24;
+  for (int i = 0; i < lights; ++i) {
+    const double z = 1 - 0.5 * (i + 0.5) / lights, r = std::sqrt(1 - z * z);
+    scene.lighting.lights.push_back(Light::Directional(
+        Vec3d(r * std::cos(golden * i), r * std::sin(golden * i), z), Vec3d(1.0, 0.9, 0.8)));
+  }
+  render::SceneObject sphere;
+  sphere.mesh = geometry::MakeSphere(0.9, 6);
+  sphere.material = material;
+  scene.objects.push_back(sphere);
+  render::RenderOptions options;
+  options.model.lobe = lobe;
+  render::RenderOutput out = render::Render(scene, options, true);
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> noise(0, static_cast<float>(sigma));
+  std::vector<const float*> images;
+  std::vector<Vec3d> dirs, intensities;
+  for (std::size_t j = 0; j < out.per_light.size(); ++j) {
+    if (sigma > 0) {
+      for (float& v : out.per_light[j].pixels) v += noise(rng);
+    }
+    images.push_back(out.per_light[j].pixels.data());
+    dirs.push_back(scene.lighting.lights[j].direction_cam);
+    intensities.push_back(scene.lighting.lights[j].diffuse_intensity);
+  }
+  Capture c;
+  c.data = solve::GatherObservations(images, size, size, out.mask, dirs, intensities);
+  for (int p : c.data.pixels) {
+    const float* n = out.normal_cam.pixels.data() + 3 * std::size_t(p);
+    c.normals.emplace_back(n[0], n[1], n[2]);
+  }
+  return c;
+}
+
+// |estimate − truth| within `relative` of the truth, or of `scale` where the truth is 0.
+void ExpectClose(double estimate, double truth, double relative, double scale,
+                 const std::string& what) {
+  EXPECT_LE(std::abs(estimate - truth), relative * (truth != 0 ? std::abs(truth) : scale))
+      << what << ": " << estimate << " vs " << truth;
+}
+
+Vec3d MedianAlbedo(const MaterialFit& fit) {
+  Vec3d median;
+  for (int c = 0; c < 3; ++c) {
+    std::vector<double> v;
+    for (const Vec3d& a : fit.albedo) {
+      if (a.allFinite()) v.push_back(a[c]);
+    }
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    median[c] = v[v.size() / 2];
+  }
+  return median;
+}
+
+TEST(FitMaterial, EveryPresetNoiseFreeWithinHalfAPercentAndTheRightModel) {
+  const Vec3d ambient(0.3, 0.3, 0.3);
+  for (const reflectance::MaterialPreset& preset : reflectance::MaterialPresets()) {
+    SCOPED_TRACE(preset.name);
+    const reflectance::Material& m = preset.material;
+    const Capture c = RenderSphere(m, Lobe::kPhong, ambient);
+    const MaterialFit fit = FitMaterial(c.data, c.normals, MaterialFitOptions{});
+    const ModelFit& best = fit.best();
+    const bool matte = m.ks.maxCoeff() == 0;
+    EXPECT_EQ(best.lobe, matte ? Lobe::kLambert : Lobe::kPhong) << fit.choice_note;
+    const double scale = std::max(m.kd.maxCoeff(), m.ks.maxCoeff());
+    const Vec3d kd = MedianAlbedo(fit);
+    for (int ch = 0; ch < 3; ++ch) {
+      ExpectClose(best.ambient_term[ch], ambient[ch] * m.ka[ch], 0.005, scale, "ka*Ia");
+      ExpectClose(kd[ch], m.kd[ch], 0.005, scale, "kd");
+      if (!matte) ExpectClose(best.ks[ch], m.ks[ch], 0.005, scale, "ks");
+    }
+    if (!matte) ExpectClose(best.shininess, m.shininess, 0.005, 1, "shininess");
+  }
+}
+
+TEST(FitMaterial, BlinnPhongDataIsRecognisedAsBlinnPhong) {
+  const reflectance::Material m = reflectance::FindMaterialPreset("plastic").material;
+  const Capture c = RenderSphere(m, Lobe::kBlinnPhong, Vec3d(0.2, 0.2, 0.2));
+  const MaterialFit fit = FitMaterial(c.data, c.normals, MaterialFitOptions{});
+  EXPECT_EQ(fit.best().lobe, Lobe::kBlinnPhong) << fit.choice_note;
+  ExpectClose(fit.best().shininess, m.shininess, 0.005, 1, "shininess");
+  ExpectClose(fit.best().ks[0], m.ks[0], 0.005, 1, "ks");
+}
+
+TEST(FitMaterial, UniformAlbedoIsOneParameterWithAStandardError) {
+  const reflectance::Material m = reflectance::FindMaterialPreset("jade").material;
+  const Capture c = RenderSphere(m, Lobe::kPhong, Vec3d(0.3, 0.3, 0.3), 0.002);
+  MaterialFitOptions options;
+  options.albedo = AlbedoMode::kUniform;
+  options.models = {Lobe::kPhong};
+  const MaterialFit fit = FitMaterial(c.data, c.normals, options);
+  ASSERT_EQ(fit.best().kd.size(), 1u);
+  ASSERT_EQ(fit.best().kd_se.size(), 1u);
+  for (int ch = 0; ch < 3; ++ch) {
+    EXPECT_NEAR(fit.best().kd[0][ch], m.kd[ch], 4 * fit.best().kd_se[0][ch]);
+    EXPECT_GT(fit.best().kd_se[0][ch], 0);
+    EXPECT_LT(fit.best().kd_se[0][ch], 0.01);
+  }
+  EXPECT_EQ(fit.best().parameters, 10u);
+}
+
+// Over 100 noisy renders, the 95 % intervals (±1.96 standard errors) of a·Ia, ks and n must
+// contain the truth 90–98 % of the time: the standard errors are honest.
+class Coverage : public ::testing::TestWithParam<double> {};
+
+TEST_P(Coverage, StandardErrorsCoverTheTruth) {
+  const double sigma = GetParam();
+  const reflectance::Material m = reflectance::FindMaterialPreset("plastic").material;
+  const Vec3d ambient(0.3, 0.3, 0.3);
+  int inside = 0, total = 0;
+  for (unsigned seed = 1; seed <= 100; ++seed) {
+    const Capture c = RenderSphere(m, Lobe::kPhong, ambient, sigma, 32, seed);
+    MaterialFitOptions options;
+    options.models = {Lobe::kPhong};
+    options.threads = 1;
+    const ModelFit fit = FitMaterial(c.data, c.normals, options).best();
+    ASSERT_TRUE(fit.covariance_ok);
+    auto count = [&](double estimate, double se, double truth) {
+      inside += std::abs(estimate - truth) <= 1.96 * se;
+      ++total;
+    };
+    for (int ch = 0; ch < 3; ++ch) {
+      count(fit.ambient_term[ch], fit.ambient_se[ch], ambient[ch] * m.ka[ch]);
+      count(fit.ks[ch], fit.ks_se[ch], m.ks[ch]);
+    }
+    count(fit.shininess, fit.shininess_se, m.shininess);
+  }
+  const double coverage = double(inside) / total;
+  std::printf("sigma %.3f: 95%% intervals contain the truth in %.1f%% of %d cases\n", sigma,
+              100 * coverage, total);
+  EXPECT_GE(coverage, 0.90);
+  EXPECT_LE(coverage, 0.98);
+}
+
+INSTANTIATE_TEST_SUITE_P(FitMaterial, Coverage, ::testing::Values(0.002, 0.01));
+
+TEST(FitMaterial, ErrorsGrowSmoothlyWithNoise) {
+  const reflectance::Material m = reflectance::FindMaterialPreset("plastic").material;
+  double previous = 0;
+  for (double sigma : {0.0, 0.002, 0.01}) {
+    const Capture c = RenderSphere(m, Lobe::kPhong, Vec3d(0.3, 0.3, 0.3), sigma);
+    MaterialFitOptions options;
+    options.models = {Lobe::kPhong};
+    const ModelFit fit = FitMaterial(c.data, c.normals, options).best();
+    const double error = std::abs(fit.shininess / m.shininess - 1);
+    EXPECT_GE(error + 1e-6, previous) << sigma;
+    EXPECT_LT(error, 0.005 + 5 * sigma) << sigma;  // σ 0.01: within 5 %
+    EXPECT_NEAR(fit.sigma, sigma, 0.1 * sigma + 1e-4) << "the noise estimate";
+    previous = error;
+  }
+}
+
+TEST(FitMaterial, BadInputIsOneLine) {
+  const reflectance::Material m = reflectance::FindMaterialPreset("plastic").material;
+  Capture c = RenderSphere(m, Lobe::kPhong, Vec3d::Zero(), 0, 24);
+  std::vector<Vec3d> normals = c.normals;
+  normals.pop_back();
+  EXPECT_THROW(FitMaterial(c.data, normals, {}), std::invalid_argument);
+  normals = c.normals;
+  normals[3] = Vec3d(NAN, 0, 1);
+  try {
+    FitMaterial(c.data, normals, {});
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("not finite"), std::string::npos) << e.what();
+  }
+  std::fill(normals.begin(), normals.end(), Vec3d::Zero());
+  EXPECT_THROW(FitMaterial(c.data, normals, {}), std::invalid_argument);
+  // Three lights: Phong needs four.
+  solve::PhotometricData three = c.data;
+  three.images = 3;
+  three.light_directions.resize(3);
+  three.light_intensities.resize(3);
+  three.values.clear();
+  for (std::size_t p = 0; p < c.data.pixel_count(); ++p) {
+    three.values.insert(three.values.end(), c.data.pixel(p), c.data.pixel(p) + 9);
+  }
+  try {
+    FitMaterial(three, c.normals, {});
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("needs at least 4"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace iphong::material
