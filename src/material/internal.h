@@ -78,4 +78,22 @@ std::size_t Censor(const Sample& s, reflectance::Lobe lobe, const Coefficients& 
 // The model's prediction of observation (p, j): a + E_j (kd d + ks s).
 Vec3d Predict(const Sample& s, reflectance::Lobe lobe, const Coefficients& c, std::size_t p, int j);
 
+// Ceres's refinement (refine.cc) of the coefficients `c` of a censored fit over the `used`
+// observations: (a, ks, log n) with the albedos eliminated inside each pixel's residuals
+// (variable projection, exact derivatives through the elimination) or, with `eliminate_kd`
+// false, one parameter block per group. Updates `c`; returns the fit with standard errors.
+ModelFit Refine(const Sample& s, reflectance::Lobe lobe, bool eliminate_kd,
+                const std::vector<unsigned char>& used, int threads, Coefficients* c);
+
+// The lobe as the data show it (predict.cc): binned (observation − ambient − diffuse)/(E·ks).
+std::vector<LobeBin> LobeBins(const Sample& s, const Coefficients& c, reflectance::Lobe lobe,
+                              const std::vector<unsigned char>& used);
+
+// kd for every pixel in `with_normal` (data indices), by chunks: the closed form with the shared
+// coefficients of `c`, censored once like the fit. NaN where nothing lit the pixel.
+std::vector<Vec3d> PixelAlbedos(const solve::PhotometricData& data,
+                                const std::vector<Vec3d>& normals,
+                                const std::vector<std::size_t>& with_normal, reflectance::Lobe lobe,
+                                const Coefficients& c, const MaterialFitOptions& options);
+
 }  // namespace iphong::material::internal

@@ -1,0 +1,242 @@
+// Ceres's refinement of a model's censored least-squares fit, and the covariance of its shared
+// coefficients (ceres::Covariance), scaled by the residual variance.
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/parallel.h"
+#include "material/internal.h"
+#include "reflectance/material.h"
+#include "solve/internal.h"
+
+namespace iphong::material::internal {
+
+using reflectance::Lobe;
+
+namespace {
+
+// One pixel's residuals r_jc = y − a − E_jc (kd_c d_j + ks_c s_j(n)) over its used lights, the
+// lobe from the shared model (reflectance::LobePower). kd is a parameter block, or eliminated:
+// the least-squares kd_c for the current (a, ks, n), differentiated through.
+struct PixelResidual {
+  const Sample* s = nullptr;
+  std::size_t p = 0;
+  std::vector<int> lights;
+  reflectance::ModelOptions model;
+
+  template <typename T>
+  bool Evaluate(const T* ambient, const T* ks, const T* log_n, const T* kd, T* r) const {
+    using std::exp;
+    const T n = exp(log_n[0]);
+    const std::size_t m = lights.size();
+    std::vector<T> lobe(m, T(0));
+    if (model.lobe != Lobe::kLambert) {
+      for (std::size_t i = 0; i < m; ++i) {
+        const double c = s->cosine(model.lobe, p * s->lights + lights[i]);
+        if (c > 0) lobe[i] = reflectance::LobePower(T(c), T(0), n, model);
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      T kdc;
+      if (kd) {
+        kdc = kd[c];
+      } else {
+        T num(0);
+        double den = 0;
+        for (std::size_t i = 0; i < m; ++i) {
+          const int j = lights[i];
+          const double ed = s->data->light_intensities[j][c] * s->diffuse[p * s->lights + j];
+          const double e = s->data->light_intensities[j][c];
+          num += ed * (T(double(s->y(p, j)[c])) - ambient[c] - e * ks[c] * lobe[i]);
+          den += ed * ed;
+        }
+        kdc = den > 1e-8 ? num / den : T(0);
+      }
+      for (std::size_t i = 0; i < m; ++i) {
+        const int j = lights[i];
+        const double e = s->data->light_intensities[j][c];
+        const double d = s->diffuse[p * s->lights + j];
+        r[3 * i + c] = T(double(s->y(p, j)[c])) - ambient[c] - e * (kdc * d + ks[c] * lobe[i]);
+      }
+    }
+    return true;
+  }
+};
+
+struct EliminatedResidual : PixelResidual {
+  template <typename T>
+  bool operator()(const T* ambient, const T* ks, const T* log_n, T* r) const {
+    return Evaluate<T>(ambient, ks, log_n, nullptr, r);
+  }
+};
+struct GroupResidual : PixelResidual {
+  template <typename T>
+  bool operator()(const T* ambient, const T* ks, const T* log_n, const T* kd, T* r) const {
+    return Evaluate<T>(ambient, ks, log_n, kd, r);
+  }
+};
+
+double Rss(const Sample& s, Lobe lobe, const Coefficients& c,
+           const std::vector<unsigned char>& used) {
+  double rss = 0;
+  for (std::size_t p = 0; p < s.size(); ++p) {
+    if (!c.kd_known[s.group[p]]) continue;
+    for (int j = 0; j < s.lights; ++j) {
+      if (!used[p * s.lights + j]) continue;
+      const Vec3d r =
+          Eigen::Vector3f(s.y(p, j)).cast<double>() - internal::Predict(s, lobe, c, p, j);
+      rss += r.squaredNorm();
+    }
+  }
+  return rss;
+}
+
+}  // namespace
+
+// Ceres's refinement of the censored fit and the covariance of its shared coefficients.
+ModelFit Refine(const Sample& s, Lobe lobe, bool eliminate_kd,
+                const std::vector<unsigned char>& used, int threads, Coefficients* c) {
+  ModelFit fit;
+  fit.lobe = lobe;
+  const bool specular = lobe != Lobe::kLambert;
+  double ambient[3] = {c->ambient[0], c->ambient[1], c->ambient[2]};
+  double ks[3] = {c->ks[0], c->ks[1], c->ks[2]};
+  double log_n[1] = {specular ? std::log(c->shininess) : 0.0};
+  std::vector<std::array<double, 3>> kd(s.groups);
+  for (int g = 0; g < s.groups; ++g) kd[g] = {c->kd[g][0], c->kd[g][1], c->kd[g][2]};
+
+  ceres::Problem problem;
+  reflectance::ModelOptions model;
+  model.lobe = lobe;
+  std::size_t observations = 0;
+  std::vector<unsigned char> group_used(s.groups, 0);
+  for (std::size_t p = 0; p < s.size(); ++p) {
+    const int g = s.group[p];
+    if (!c->kd_known[g]) continue;
+    std::vector<int> lights;
+    for (int j = 0; j < s.lights; ++j) {
+      if (used[p * s.lights + j]) lights.push_back(j);
+    }
+    if (lights.empty()) continue;
+    observations += 3 * lights.size();
+    const int residuals = static_cast<int>(3 * lights.size());
+    if (eliminate_kd) {
+      auto* f = new EliminatedResidual;
+      f->s = &s, f->p = p, f->lights = std::move(lights), f->model = model;
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<EliminatedResidual, ceres::DYNAMIC, 3, 3, 1>(f,
+                                                                                       residuals),
+          nullptr, ambient, ks, log_n);
+    } else {
+      auto* f = new GroupResidual;
+      f->s = &s, f->p = p, f->lights = std::move(lights), f->model = model;
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<GroupResidual, ceres::DYNAMIC, 3, 3, 1, 3>(f, residuals),
+          nullptr, ambient, ks, log_n, kd[g].data());
+      group_used[g] = 1;
+    }
+  }
+  if (observations == 0) throw std::invalid_argument("no usable observation lights a pixel");
+  for (int i = 0; i < 3; ++i) {
+    problem.SetParameterLowerBound(ambient, i, 0);
+    if (specular) problem.SetParameterLowerBound(ks, i, 0);
+  }
+  if (specular) {
+    problem.SetParameterLowerBound(log_n, 0, 0);
+    problem.SetParameterUpperBound(log_n, 0, std::log(8192.0));
+  } else {
+    problem.SetParameterBlockConstant(ks);
+    problem.SetParameterBlockConstant(log_n);
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  options.max_num_iterations = 50;
+  options.num_threads = ResolveThreads(threads);
+  options.function_tolerance = 1e-12;
+  options.parameter_tolerance = 1e-10;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  fit.iterations = static_cast<int>(summary.iterations.size());
+  fit.converged = summary.termination_type == ceres::CONVERGENCE;
+
+  c->ambient = Vec3d(ambient[0], ambient[1], ambient[2]);
+  c->ks = specular ? Vec3d(ks[0], ks[1], ks[2]) : Vec3d::Zero();
+  c->shininess = specular ? std::exp(log_n[0]) : 0;
+  if (eliminate_kd) {
+    const Coefficients albedo = internal::AlbedoFit(s, lobe, c->ambient, c->ks, c->shininess, used);
+    c->kd = albedo.kd;
+    c->kd_known = albedo.kd_known;
+  } else {
+    for (int g = 0; g < s.groups; ++g) c->kd[g] = Vec3d(kd[g][0], kd[g][1], kd[g][2]);
+  }
+  c->rss = Rss(s, lobe, *c, used);
+
+  std::size_t albedos = 0;
+  for (int g = 0; g < s.groups; ++g) albedos += c->kd_known[g];
+  fit.parameters = 3 * albedos + (specular ? 7 : 3);
+  fit.observations = observations;
+  fit.rss = c->rss;
+  fit.sigma = observations > fit.parameters
+                  ? std::sqrt(c->rss / static_cast<double>(observations - fit.parameters))
+                  : NAN;
+  fit.bic = observations * std::log(std::max(c->rss, 1e-300) / observations) +
+            fit.parameters * std::log(static_cast<double>(observations));
+
+  // The covariance of the free blocks, scaled by σ̂² (Ceres gives (JᵀJ)⁻¹ of the residuals as
+  // they are). Rank deficient (ks = 0 leaves n free, say): NaN standard errors.
+  // Without a lobe (ks = 0 in every channel) the shininess is not observable: its block is
+  // held and left out, and its standard error stays NaN.
+  const bool lobe_seen = specular && c->ks.maxCoeff() > 0;
+  if (specular && !lobe_seen) problem.SetParameterBlockConstant(log_n);
+  std::vector<const double*> blocks = {ambient};
+  if (specular) blocks.push_back(ks);
+  if (lobe_seen) blocks.push_back(log_n);
+  std::vector<int> kd_block_group;
+  if (!eliminate_kd) {
+    for (int g = 0; g < s.groups; ++g) {
+      if (group_used[g]) blocks.push_back(kd[g].data()), kd_block_group.push_back(g);
+    }
+  }
+  ceres::Covariance::Options cov_options;
+  cov_options.num_threads = ResolveThreads(threads);
+  cov_options.algorithm_type = blocks.size() <= 16 ? ceres::DENSE_SVD : ceres::SPARSE_QR;
+  ceres::Covariance covariance(cov_options);
+  fit.covariance_ok = std::isfinite(fit.sigma) && covariance.Compute(blocks, &problem);
+  if (fit.covariance_ok) {
+    const double var = fit.sigma * fit.sigma;
+    double block[9];
+    covariance.GetCovarianceBlock(ambient, ambient, block);
+    for (int i = 0; i < 3; ++i) fit.ambient_se[i] = std::sqrt(var * block[4 * i]);
+    if (specular) {
+      double ks_block[9];
+      covariance.GetCovarianceBlock(ks, ks, ks_block);
+      for (int i = 0; i < 3; ++i) fit.ks_se[i] = std::sqrt(var * ks_block[4 * i]);
+    }
+    if (lobe_seen) {
+      double ks_block[9], n_block[1], cross[3];
+      covariance.GetCovarianceBlock(ks, ks, ks_block);
+      covariance.GetCovarianceBlock(log_n, log_n, n_block);
+      covariance.GetCovarianceBlock(ks, log_n, cross);
+      for (int i = 0; i < 3; ++i) {
+        // The correlation is unchanged by n = exp(log n) to first order.
+        fit.ks_shininess_correlation[i] = cross[i] / std::sqrt(ks_block[4 * i] * n_block[0]);
+      }
+      fit.shininess_se = c->shininess * std::sqrt(var * n_block[0]);  // the delta method
+    }
+    fit.kd_se.assign(s.groups, Vec3d::Constant(NAN));
+    for (std::size_t b = 0; b < kd_block_group.size(); ++b) {
+      const int g = kd_block_group[b];
+      covariance.GetCovarianceBlock(kd[g].data(), kd[g].data(), block);
+      for (int i = 0; i < 3; ++i) fit.kd_se[g][i] = std::sqrt(var * block[4 * i]);
+    }
+    if (eliminate_kd) fit.kd_se.clear();
+  }
+  fit.ambient_term = c->ambient;
+  fit.ks = c->ks;
+  fit.shininess = c->shininess;
+  fit.kd = c->kd;
+  return fit;
+}
+
+}  // namespace iphong::material::internal
