@@ -71,6 +71,7 @@ void AddRenderCommand(CLI::App& app);
 void AddNormalsCommand(CLI::App& app);  // normals and eval
 void AddIntegrateCommand(CLI::App& app);
 void AddCalibrateCommand(CLI::App& app);  // calibrate-lights
+void AddFitMaterialCommand(CLI::App& app);
 
 // Every subcommand, in the order `iphong --help` lists them. New commands are added here only.
 inline void AddAllCommands(CLI::App& app) {
@@ -79,6 +80,7 @@ inline void AddAllCommands(CLI::App& app) {
   AddCalibrateCommand(app);
   AddNormalsCommand(app);
   AddIntegrateCommand(app);
+  AddFitMaterialCommand(app);
   AddMaterialsCommand(app);
 }
 

@@ -125,6 +125,11 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
   for (int j = 0; j < k; ++j) result.fold[j] = j % folds;
 
   const bool eliminate = options.albedo == AlbedoMode::kPerPixel;
+  const double fits = static_cast<double>(options.models.size()) * (choose ? folds + 1 : 1);
+  int fits_done = 0;
+  auto fitted = [&] {
+    if (options.progress) options.progress(++fits_done / fits);
+  };
   std::vector<Coefficients> coefficients;
   std::vector<std::size_t> censored(options.models.size(), 0);
   std::vector<std::vector<unsigned char>> used(options.models.size());
@@ -134,6 +139,7 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
     result.models.push_back(
         internal::Refine(s, options.models[m], eliminate, used[m], options.threads, &c));
     result.summary.iterations += result.models.back().iterations;
+    fitted();
     coefficients.push_back(std::move(c));
   }
 
@@ -157,6 +163,7 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
         std::size_t fold_censored = 0;
         fold_fit[m] =
             CensoredFit(s, options.models[m], train, options.threads, &fold_used, &fold_censored);
+        fitted();
       }
       // A pixel counts only where every model knows its albedo, so the scores are paired.
       std::vector<unsigned char> scored_test = test;
@@ -235,7 +242,18 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
       if (chosen.kd_known[group_of[p]]) result.albedo[p] = chosen.kd[group_of[p]];
     }
   }
-  result.lobe = internal::LobeBins(s, chosen, lobe, used[result.chosen]);
+  for (std::size_t m = 0; m < models; ++m) {
+    if (options.models[m] == Lobe::kLambert) continue;
+    if (result.lobe_model < 0 || static_cast<int>(m) == result.chosen ||
+        (options.models[result.chosen] == Lobe::kLambert &&
+         result.models[m].heldout_rmse < result.models[result.lobe_model].heldout_rmse)) {
+      if (result.lobe_model != result.chosen) result.lobe_model = static_cast<int>(m);
+    }
+  }
+  if (result.lobe_model >= 0) {
+    result.lobe = internal::LobeBins(s, coefficients[result.lobe_model],
+                                     options.models[result.lobe_model], used[result.lobe_model]);
+  }
   result.summary.success = true;
   result.summary.seconds = SecondsSince(start);
   result.summary.message = result.choice_note;
