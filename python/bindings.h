@@ -10,6 +10,7 @@ void BindRender(pybind11::module_& m);
 void BindSolve(pybind11::module_& m);
 void BindCalibrate(pybind11::module_& m);
 void BindIntegrate(pybind11::module_& m);
+void BindMaterial(pybind11::module_& m);
 void BindIo(pybind11::module_& m);
 
 }  // namespace iphong::python

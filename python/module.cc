@@ -30,5 +30,6 @@ PYBIND11_MODULE(_core, m) {
   iphong::python::BindSolve(m);
   iphong::python::BindCalibrate(m);
   iphong::python::BindIntegrate(m);
+  iphong::python::BindMaterial(m);
   iphong::python::BindIo(m);
 }

@@ -183,6 +183,9 @@ void RunFitMaterial(const FitMaterialCommandOptions& o) {
   }
   const io::Dataset& dataset = loaded.dataset;
   const solve::PhotometricData& data = loaded.observations;
+  if (std::string m = material::CheckLightCount(data.images, options); !m.empty()) {
+    throw std::runtime_error(o.dataset + ": " + m);
+  }
   Say(o.common, "Read %s: %s\n", o.dataset.c_str(), io::DescribeDataset(dataset).c_str());
   for (const std::string& warning : dataset.warnings) Warn(warning);
   if (std::string counts = io::DescribeImageCounts(dataset); !counts.empty()) Warn(counts);

@@ -166,6 +166,15 @@ estimate_intensities.__doc__ = _core.estimate_intensities.__doc__
 
 
 @_short_type_errors
+def fit_material(images, light_directions, normals, *args, encoding=None, **kwargs):
+    images = _image_stack(images, len(light_directions), encoding)
+    return _core.fit_material(images, light_directions, normals, *args, **kwargs)
+
+
+fit_material.__doc__ = _core.fit_material.__doc__
+
+
+@_short_type_errors
 def angular_error(estimate, ground_truth, mask=None):
     """Angular error between two normal maps (H, W, 3) over the mask where the ground truth is
     non-zero: mean_angular_error_deg, median_angular_error_deg, fraction_below_{5,10,20}_deg,
@@ -282,6 +291,7 @@ __all__ = [
     "calibrate_lights",
     "estimate_intensities",
     "estimate_normals",
+    "fit_material",
     "height_to_mesh",
     "integrate",
     "load_dataset",

@@ -7,6 +7,7 @@
 
 #include "core/errors.h"
 #include "geometry/primitives.h"
+#include "io/dataset_text.h"
 #include "io/files.h"
 #include "io/json_reader.h"
 #include "io/mesh_io.h"
@@ -65,7 +66,10 @@ int IntegerIn(const JsonReader& j, const std::string& key, int fallback, int lo,
   return v;
 }
 
-Material ParseMaterial(const JsonReader& j) {
+// A preset name, or {"preset" | "file", then coefficients over it}. "file" is a material.json
+// (`iphong fit-material`'s, a dataset's): its ka, kd, ks and shininess; its "ambient" and "model"
+// belong to the scene ("ambient", "model"). Without kd (fitted per pixel) the scene gives one.
+Material ParseMaterial(const JsonReader& j, ParseContext& context) {
   Material m;
   if (j.value().is_string()) {
     try {
@@ -74,8 +78,18 @@ Material ParseMaterial(const JsonReader& j) {
       j.Fail(e.what());
     }
   }
-  j.OnlyKeys({"preset", "ka", "kd", "ks", "shininess"});
-  if (j.Has("preset")) m = ParseMaterial(j.Field("preset"));
+  j.OnlyKeys({"preset", "file", "ka", "kd", "ks", "shininess"});
+  if (j.Has("preset") && j.Has("file")) j.Fail("give \"preset\" or \"file\", not both");
+  if (j.Has("preset")) m = ParseMaterial(j.Field("preset"), context);
+  if (j.Has("file")) {
+    const std::string path = context.Input(j.Field("file").String());
+    const DatasetMaterial file = ParseMaterialJson(ReadTextFile(path), path);
+    if (!file.kd_known && !j.Has("kd")) {
+      j.Field("file").Fail(path + " has no kd (it was fitted per pixel: see its albedo.exr); "
+                           "add \"kd\" to the material");
+    }
+    m = file.material;
+  }
   return ReadMaterialCoefficients(j, m);
 }
 
@@ -261,7 +275,7 @@ render::SceneObject ParseObject(const JsonReader& j, ParseContext& context) {
       j.Fail("coordinates beyond 1e15 scene units (size or transform too large)");
     }
   }
-  object.material = j.Has("material") ? ParseMaterial(j.Field("material"))
+  object.material = j.Has("material") ? ParseMaterial(j.Field("material"), context)
                                       : reflectance::FindMaterialPreset("plastic").material;
   if (j.Has("albedo_texture")) {
     const JsonReader texture = j.Field("albedo_texture");

@@ -30,6 +30,30 @@ std::string MaterialFitOptions::Validate() const {
 
 int MinimumLights(Lobe lobe) { return lobe == Lobe::kLambert ? 2 : 4; }
 
+std::string CheckLightCount(int lights, const MaterialFitOptions& options) {
+  if (options.models.empty()) return "no model to fit";
+  const int k = lights;
+  Lobe neediest = options.models.front();
+  for (Lobe m : options.models) {
+    if (MinimumLights(m) > MinimumLights(neediest)) neediest = m;
+  }
+  if (k < MinimumLights(neediest)) {
+    return std::to_string(k) + " light(s): the " + reflectance::LobeName(neediest) +
+           " model needs at least " + std::to_string(MinimumLights(neediest));
+  }
+  const int folds = std::min(options.folds, k);
+  // Interleaved folds: light j in fold j mod F, so each training set spans the light positions
+  // the capture has (lights are usually listed ring by ring or in a raster).
+  const int smallest_training = k - (k + folds - 1) / folds;
+  if (options.models.size() > 1 && smallest_training < MinimumLights(neediest)) {
+    const int needed = MinimumLights(neediest) * folds / (folds - 1) + 1;
+    return std::to_string(k) + " light(s): choosing between models with " +
+           std::to_string(folds) + " folds needs at least " + std::to_string(needed) +
+           " (or name one model)";
+  }
+  return "";
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -93,27 +117,9 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
     if (n.squaredNorm() > 0) normals[p] = n.normalized();
   }
   const int k = data.images;
-  Lobe neediest = options.models.front();
-  for (Lobe m : options.models) {
-    if (MinimumLights(m) > MinimumLights(neediest)) neediest = m;
-  }
-  if (k < MinimumLights(neediest)) {
-    throw std::invalid_argument(std::to_string(k) + " light(s): the " +
-                                reflectance::LobeName(neediest) + " model needs at least " +
-                                std::to_string(MinimumLights(neediest)));
-  }
+  if (std::string m = CheckLightCount(k, options); !m.empty()) throw std::invalid_argument(m);
   const bool choose = options.models.size() > 1;
   const int folds = std::min(options.folds, k);
-  // Interleaved folds: light j in fold j mod F, so each training set spans the light positions
-  // the capture has (lights are usually listed ring by ring or in a raster).
-  const int smallest_training = k - (k + folds - 1) / folds;
-  if (choose && smallest_training < MinimumLights(neediest)) {
-    const int needed = MinimumLights(neediest) * folds / (folds - 1) + 1;
-    throw std::invalid_argument(std::to_string(k) + " light(s): choosing between models with " +
-                                std::to_string(folds) + " folds needs at least " +
-                                std::to_string(needed) + " (or name one model)");
-  }
-
   MaterialFit result;
   std::vector<std::size_t> with_normal;
   std::vector<int> group_of;

@@ -72,6 +72,10 @@ struct MaterialFitOptions {
 // fold more than this in every training set.
 int MinimumLights(reflectance::Lobe lobe);
 
+// "" when `lights` are enough for the options' models (and their choice), else the one-line
+// reason with the number needed.
+std::string CheckLightCount(int lights, const MaterialFitOptions& options);
+
 // One model fitted to all the lights, and scored on held-out ones.
 struct ModelFit {
   reflectance::Lobe lobe = reflectance::Lobe::kLambert;
