@@ -8,6 +8,7 @@
 #include "bindings.h"
 #include "material/fit.h"
 #include "reflectance/material.h"
+#include "render/relight.h"
 
 namespace py = pybind11;
 
@@ -164,6 +165,55 @@ per integer label in regions (H, W); labels < 0 left out). Returns models (a dic
 choice, fold, albedo (H, W, 3; NaN where unknown), lobe (binned data of the chosen model's lobe, or
 the best one's when Lambert won: lobe_model), pixels, fitted_pixels, saturated, censored, seconds.
 Raises ValueError for bad input (sizes, a NaN normal, too few lights: how many are needed).)doc");
+
+  m.def(
+      "relight",
+      [](const py::object& normals_in, const py::object& albedo_in, const py::object& light_in,
+         const py::object& intensity, const std::string& model, const py::object& ks,
+         double shininess, const py::object& ambient_term, const py::object& specular_in,
+         double exposure, double specular_scale, int threads) {
+        const ImageF normals = ToImage(normals_in, "normals");
+        const ImageF albedo = ToImage(albedo_in, "albedo");
+        ImageF specular;
+        render::RelightInput input;
+        input.normals_cam = &normals;
+        input.albedo = &albedo;
+        if (!specular_in.is_none()) {
+          specular = ToImage(specular_in, "specular");
+          input.specular = &specular;
+        }
+        input.lobe = reflectance::ParseLobe(model);
+        input.ks = ToRgb(ks, "ks");
+        input.shininess = shininess;
+        input.ambient_term = ToRgb(ambient_term, "ambient_term");
+        input.exposure = exposure;
+        input.specular_scale = specular_scale;
+        input.threads = threads;
+        auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(light_in);
+        if (!a) PyErr_Clear();
+        const std::size_t lights = a && a.ndim() == 2 ? a.shape(0) : 1;
+        const std::vector<Vec3d> directions = a && a.ndim() == 2
+                                                  ? ToRows(light_in, lights, "light")
+                                                  : std::vector<Vec3d>{ToVec3(light_in, "light")};
+        const Vec3d e = ToRgb(intensity, "intensity");
+        for (const Vec3d& d : directions)
+          input.lights.push_back(reflectance::Light::Directional(d, e));
+        ImageF image;
+        {
+          py::gil_scoped_release release;
+          image = render::Relight(input);
+        }
+        return ToArray(image);
+      },
+      py::arg("normals"), py::arg("albedo"), py::arg("light"), py::arg("intensity") = 1.0,
+      py::arg("model") = "lambert", py::arg("ks") = 0.0, py::arg("shininess") = 1.0,
+      py::arg("ambient_term") = 0.0, py::arg("specular") = py::none(), py::arg("exposure") = 1.0,
+      py::arg("specular_scale") = 1.0, py::arg("threads") = 0,
+      R"doc(The captured object under new light(s) (`iphong relight`): normals (H, W, 3) and albedo
+(kd, H, W, 3) as estimate_normals or fit_material return them, light a direction (3,) or several
+(L, 3) toward the light, intensity one number or RGB; model 'lambert', 'phong' or 'blinn-phong'
+with ks (or specular, a per-pixel ks map (H, W, 3)), shininess and ambient_term (Ia*ka). Returns
+the linear image (H, W, 3) times exposure; 0 where the normal is zero or the albedo NaN.)doc");
 }
 
 }  // namespace iphong::python

@@ -72,6 +72,7 @@ void AddNormalsCommand(CLI::App& app);  // normals and eval
 void AddIntegrateCommand(CLI::App& app);
 void AddCalibrateCommand(CLI::App& app);  // calibrate-lights
 void AddFitMaterialCommand(CLI::App& app);
+void AddRelightCommand(CLI::App& app);
 
 // Every subcommand, in the order `iphong --help` lists them. New commands are added here only.
 inline void AddAllCommands(CLI::App& app) {
@@ -81,6 +82,7 @@ inline void AddAllCommands(CLI::App& app) {
   AddNormalsCommand(app);
   AddIntegrateCommand(app);
   AddFitMaterialCommand(app);
+  AddRelightCommand(app);
   AddMaterialsCommand(app);
 }
 

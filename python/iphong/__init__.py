@@ -46,6 +46,7 @@ def _short_type_errors(function):
 
 
 integrate = _short_type_errors(_core.integrate)
+relight = _short_type_errors(_core.relight)
 height_to_mesh = _short_type_errors(_core.height_to_mesh)
 normals_from_height = _short_type_errors(_core.normals_from_height)
 
@@ -299,6 +300,7 @@ __all__ = [
     "material_presets",
     "materials",
     "normals_from_height",
+    "relight",
     "render",
     "save_dataset",
     "save_mesh",

@@ -85,7 +85,8 @@ Material ParseMaterial(const JsonReader& j, ParseContext& context) {
     const std::string path = context.Input(j.Field("file").String());
     const DatasetMaterial file = ParseMaterialJson(ReadTextFile(path), path);
     if (!file.kd_known && !j.Has("kd")) {
-      j.Field("file").Fail(path + " has no kd (it was fitted per pixel: see its albedo.exr); "
+      j.Field("file").Fail(path +
+                           " has no kd (it was fitted per pixel: see its albedo.exr); "
                            "add \"kd\" to the material");
     }
     m = file.material;

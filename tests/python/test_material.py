@@ -94,3 +94,23 @@ def test_bad_input_is_value_error():
         iphong.fit_material(*args, r["normals"], mask=r["mask"], albedo="texture")
     with pytest.raises(ValueError, match="no pixel|selects no"):
         iphong.fit_material(*args, r["normals"], mask=np.zeros((64, 96), bool))
+
+
+def test_relight_a_fitted_capture_under_one_of_its_lights():
+    material = {"ka": 0.05, "kd": [0.6, 0.4, 0.3], "ks": 0.5, "shininess": 30}
+    r = iphong.render(scene([ball(0, material)], lights=12), per_light=True)
+    fit = iphong.fit_material(r["images"], r["light_directions"], r["normals"],
+                              r["light_intensities"], mask=r["mask"])
+    best = fit["models"][1]
+    image = iphong.relight(r["normals"], fit["albedo"], r["light_directions"][3], model="phong",
+                           ks=best["ks"], shininess=best["shininess"],
+                           ambient_term=best["ambient_term"], intensity=r["light_intensities"][3])
+    np.testing.assert_allclose(image[r["mask"]], r["images"][3][r["mask"]], atol=2e-4)
+    # Two lights add up; exposure scales.
+    both = iphong.relight(r["normals"], fit["albedo"], r["light_directions"][:2], exposure=2)
+    one = [iphong.relight(r["normals"], fit["albedo"], l) for l in r["light_directions"][:2]]
+    np.testing.assert_allclose(both, 2 * (one[0] + one[1]), rtol=1e-5, atol=1e-6)
+    with pytest.raises(ValueError, match="albedo is"):
+        iphong.relight(r["normals"], fit["albedo"][:10], [0, 0, 1])
+    with pytest.raises(ValueError, match="model"):
+        iphong.relight(r["normals"], fit["albedo"], [0, 0, 1], model="cook-torrance")

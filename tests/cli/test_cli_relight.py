@@ -1,0 +1,129 @@
+"""`iphong relight`: a recovered capture under one of its own lights reproduces that photo; the
+WebGL viewer, rendered in headless chromium, matches `iphong relight` for the same light (its
+shader is the model's second spelling); bad inputs are one line and write nothing."""
+import json
+import pathlib
+import shutil
+import struct
+import subprocess
+import zlib
+
+import pytest
+
+from cli import IPHONG, assert_refused, binary_available, render_dataset, run
+
+pytestmark = pytest.mark.skipif(not binary_available(), reason=f"no iphong binary at {IPHONG}")
+
+CHROMIUM = shutil.which("chromium")
+
+
+def read_png(path):
+    """An 8-bit, non-interlaced RGB or RGBA PNG as (width, height, rows of RGB triples): a
+    decoder written out here so the test does not depend on iphong's own image code."""
+    data = pathlib.Path(path).read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    at, idat = 8, b""
+    while at < len(data):
+        length, kind = struct.unpack(">I4s", data[at:at + 8])
+        body = data[at + 8:at + 8 + length]
+        if kind == b"IHDR":
+            width, height, depth, colour, _, _, interlace = struct.unpack(">IIBBBBB", body)
+            assert depth == 8 and colour in (2, 6) and interlace == 0, (depth, colour, interlace)
+        elif kind == b"IDAT":
+            idat += body
+        at += 12 + length
+    channels = 3 if colour == 2 else 4
+    raw, stride = zlib.decompress(idat), width * channels
+    rows, previous = [], bytearray(stride)
+    for r in range(height):
+        kind, line = raw[r * (stride + 1)], bytearray(raw[r * (stride + 1) + 1:(r + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - channels] if i >= channels else 0
+            b = previous[i]
+            c = previous[i - channels] if i >= channels else 0
+            if kind == 1:
+                line[i] = (line[i] + a) & 255
+            elif kind == 2:
+                line[i] = (line[i] + b) & 255
+            elif kind == 3:
+                line[i] = (line[i] + (a + b) // 2) & 255
+            elif kind == 4:
+                p = a + b - c
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+        rows.append([tuple(line[x * channels:x * channels + 3]) for x in range(width)])
+        previous = line
+    return width, height, rows
+
+
+@pytest.fixture(scope="module")
+def capture(tmp_path_factory):
+    """The 12-light photometric sphere and its `iphong normals` result."""
+    root = tmp_path_factory.mktemp("relight")
+    render_dataset(root / "d")
+    code, _, err = run("normals", root / "d", "-o", root / "n")
+    assert code == 0, err
+    return root
+
+
+def test_relit_under_a_capture_light_reproduces_its_photo(capture, tmp_path):
+    d = capture / "d"
+    light = (d / "light_directions.txt").read_text().split("\n")[4]
+    code, out, err = run("relight", capture / "n", "--light", light.replace(" ", ","),
+                         "--material", d / "material.json", "--exposure", 1, "-o",
+                         tmp_path / "relit.exr")
+    assert code == 0, err
+    assert "phong from" in out
+    # The difference image, by oiiotool: the relit sphere against the render of light 5.
+    result = subprocess.run(["oiiotool", str(tmp_path / "relit.exr"), str(d / "005.exr"),
+                             "--diff"], capture_output=True, text=True)
+    mean = float(result.stdout.split("Mean error = ")[1].split()[0])
+    assert mean < 1e-4, result.stdout
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (scripts/setup-debian.sh "
+                                             "installs it); the viewer test needs a browser")
+def test_viewer_in_a_browser_matches_relight(capture, tmp_path):
+    light = "-0.4,0.5,0.77"
+    for args, out in [([], tmp_path / "relit.png"), (["--viewer"], tmp_path / "viewer.html")]:
+        code, _, err = run("relight", capture / "n", "--light", light, *args, "-o", out)
+        assert code == 0, err
+    page = (tmp_path / "viewer.html").read_text()
+    assert "http://" not in page and "https://" not in page  # self-contained: no network
+    # Another light set through the URL, as a user's drag would: the page must follow it.
+    shot = tmp_path / "shot.png"
+    subprocess.run([CHROMIUM, "--headless", "--no-sandbox", "--use-angle=swiftshader",
+                    "--enable-unsafe-swiftshader", "--hide-scrollbars",
+                    "--virtual-time-budget=10000", f"--screenshot={shot}", "--window-size=96,96",
+                    f"file://{tmp_path / 'viewer.html'}#light={light}&ui=0"],
+                   capture_output=True, timeout=120, check=True)
+    w, h, browser = read_png(shot)
+    _, _, relit = read_png(tmp_path / "relit.png")
+    assert (w, h) == (96, 96)
+    diffs, lit = [], 0
+    for y in range(h):
+        for x in range(w):
+            a, b = browser[y][x], relit[y][x]
+            if max(b) > 0:
+                lit += 1
+                diffs.append(sum(abs(p - q) for p, q in zip(a, b)) / 3 / 255)
+    mean = sum(diffs) / len(diffs)
+    print(f"viewer vs relight: mean difference {100 * mean:.3f}% over {lit} pixels")
+    assert lit > 3000
+    assert mean < 0.02
+
+
+def test_bad_inputs(capture, tmp_path):
+    n = capture / "n"
+    out = tmp_path / "x.png"
+    (tmp_path / "empty").mkdir()
+    assert_refused(tmp_path, ["relight", tmp_path / "empty", "--light", "0,0,1", "-o", out], 1,
+                   r"normals.exr: no such file")
+    assert_refused(tmp_path, ["relight", n, "--light", "0,0,0", "-o", out], 2, r"--light")
+    assert_refused(tmp_path, ["relight", n, "--light", "0,0,1", "-o", tmp_path / "x.jpg"], 2,
+                   r"\.png .*or \.exr")
+    assert_refused(tmp_path, ["relight", n, "--light", "0,0,1", "--viewer", "-o", out], 2,
+                   r"\.html")
+    out.write_bytes(b"a user's file")
+    assert_refused(tmp_path, ["relight", n, "--light", "0,0,1", "-o", out], 4, r"exists")
+    assert out.read_bytes() == b"a user's file"
