@@ -47,9 +47,8 @@ std::string CheckLightCount(int lights, const MaterialFitOptions& options) {
   const int smallest_training = k - (k + folds - 1) / folds;
   if (options.models.size() > 1 && smallest_training < MinimumLights(neediest)) {
     const int needed = MinimumLights(neediest) * folds / (folds - 1) + 1;
-    return std::to_string(k) + " light(s): choosing between models with " +
-           std::to_string(folds) + " folds needs at least " + std::to_string(needed) +
-           " (or name one model)";
+    return std::to_string(k) + " light(s): choosing between models with " + std::to_string(folds) +
+           " folds needs at least " + std::to_string(needed) + " (or name one model)";
   }
   return "";
 }
@@ -64,11 +63,11 @@ double SecondsSince(Clock::time_point t) {
 // The censored least-squares fit of one model: the profile fit on every allowed observation,
 // then twice: censor what it predicts as shadow, fit again.
 Coefficients CensoredFit(const Sample& s, Lobe lobe, const std::vector<unsigned char>& allowed,
-                         int threads, std::vector<unsigned char>* used, std::size_t* censored) {
-  Coefficients c = internal::ProfileFit(s, lobe, allowed, threads);
+                         std::vector<unsigned char>* used, std::size_t* censored) {
+  Coefficients c = internal::ProfileFit(s, lobe, allowed);
   for (int round = 0; round < 2; ++round) {
     *censored = internal::Censor(s, lobe, c, allowed, used);
-    c = internal::ProfileFit(s, lobe, *used, threads, c.shininess);
+    c = internal::ProfileFit(s, lobe, *used, c.shininess);
   }
   return c;
 }
@@ -140,8 +139,7 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
   std::vector<std::size_t> censored(options.models.size(), 0);
   std::vector<std::vector<unsigned char>> used(options.models.size());
   for (std::size_t m = 0; m < options.models.size(); ++m) {
-    Coefficients c =
-        CensoredFit(s, options.models[m], s.usable, options.threads, &used[m], &censored[m]);
+    Coefficients c = CensoredFit(s, options.models[m], s.usable, &used[m], &censored[m]);
     result.models.push_back(
         internal::Refine(s, options.models[m], eliminate, used[m], options.threads, &c));
     result.summary.iterations += result.models.back().iterations;
@@ -167,8 +165,7 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
       for (std::size_t m = 0; m < models; ++m) {
         std::vector<unsigned char> fold_used;
         std::size_t fold_censored = 0;
-        fold_fit[m] =
-            CensoredFit(s, options.models[m], train, options.threads, &fold_used, &fold_censored);
+        fold_fit[m] = CensoredFit(s, options.models[m], train, &fold_used, &fold_censored);
         fitted();
       }
       // A pixel counts only where every model knows its albedo, so the scores are paired.

@@ -13,6 +13,7 @@ namespace iphong::material::internal {
 struct Sample {
   const solve::PhotometricData* data = nullptr;
   int lights = 0;
+  int threads = 0;  // the sums over the sample's observations (LinearFit) use this many
   std::vector<std::size_t> pixel;  // index into data's pixels
   std::vector<Vec3d> normal;
   std::vector<int> group;  // albedo group of each sample pixel
@@ -67,8 +68,7 @@ Coefficients AlbedoFit(const Sample& s, reflectance::Lobe lobe, const Vec3d& amb
 // then golden-section search around the best grid point (with `near_shininess` > 0, a previous
 // answer, the grid is its ±2 steps). Lambert: LinearFit alone.
 Coefficients ProfileFit(const Sample& s, reflectance::Lobe lobe,
-                        const std::vector<unsigned char>& used, int threads,
-                        double near_shininess = 0);
+                        const std::vector<unsigned char>& used, double near_shininess = 0);
 
 // Flags in `used` (among `allowed`) the observations the coefficients do not censor: no channel
 // darker than predicted by more than the pixel's threshold. Returns how many were censored.

@@ -47,6 +47,7 @@ Sample BuildSample(const solve::PhotometricData& data, const std::vector<Vec3d>&
   Sample s;
   s.data = &data;
   s.lights = data.images;
+  s.threads = options.threads;
   const std::size_t stride =
       (with_normal->size() + options.max_pixels - 1) / static_cast<std::size_t>(options.max_pixels);
   for (std::size_t i = 0; i < with_normal->size(); i += stride) {
@@ -120,41 +121,85 @@ struct Sums {
   std::array<double, 3> n1{}, s1{}, ss{}, y1{}, ys{}, yy{};
 };
 
-Sums Accumulate(const Sample& s, Lobe lobe, double shininess,
-                const std::vector<unsigned char>& used) {
-  const solve::PhotometricData& data = *s.data;
-  const int k = s.lights;
-  const bool specular = lobe != Lobe::kLambert;
-  Sums sums;
-  sums.group.assign(s.groups, {});
-  // Where c^n < 1e-16 the lobe is below double precision against ks: its power is not taken
-  // (on a sharp lobe, most observations; the model's exp(n log c) costs more than the sums).
-  const double negligible = specular ? std::exp(std::log(1e-16) / std::max(shininess, 1e-3)) : 1;
-  for (std::size_t p = 0; p < s.size(); ++p) {
-    std::array<double, 12>& gp = sums.group[s.group[p]];
-    for (int j = 0; j < k; ++j) {
-      const std::size_t i = p * k + j;
-      if (!used[i]) continue;
-      const double cosine = specular ? s.cosine(lobe, i) : 0.0;
-      const double lobe_factor = cosine > negligible ? LobeFactor(cosine, shininess) : 0.0;
-      const float* y = s.y(p, j);
-      const Vec3d& e = data.light_intensities[j];
-      for (int c = 0; c < 3; ++c) {
-        const double d = e[c] * s.diffuse[i], sp = e[c] * lobe_factor;
-        gp[4 * c] += d * d;
-        gp[4 * c + 1] += d;
-        gp[4 * c + 2] += d * sp;
-        gp[4 * c + 3] += d * y[c];
-        sums.n1[c] += 1;
-        sums.s1[c] += sp;
-        sums.ss[c] += sp * sp;
-        sums.y1[c] += y[c];
-        sums.ys[c] += sp * y[c];
-        sums.yy[c] += double(y[c]) * y[c];
+// Adds `from` into `to`.
+void Add(const Sums& from, Sums& to) {
+  for (std::size_t g = 0; g < to.group.size(); ++g)
+    for (int i = 0; i < 12; ++i) to.group[g][i] += from.group[g][i];
+  for (int c = 0; c < 3; ++c) {
+    to.n1[c] += from.n1[c], to.s1[c] += from.s1[c], to.ss[c] += from.ss[c];
+    to.y1[c] += from.y1[c], to.ys[c] += from.ys[c], to.yy[c] += from.yy[c];
+  }
+}
+
+// `range(begin, end, part)` over the sample's pixels, one contiguous part per thread, each into
+// its own zeroed sums; returns their total.
+template <typename Range>
+Sums SumInParts(const Sample& s, Range range) {
+  const std::size_t parts =
+      std::min<std::size_t>(ResolveThreads(s.threads), std::max<std::size_t>(1, s.size() / 512));
+  std::vector<Sums> partial(parts);
+  ParallelFor(0, parts, 1, static_cast<int>(parts), [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e; ++t) {
+      partial[t].group.assign(s.groups, {});
+      range(s.size() * t / parts, s.size() * (t + 1) / parts, partial[t]);
+    }
+  });
+  for (std::size_t t = 1; t < parts; ++t) Add(partial[t], partial[0]);
+  return std::move(partial[0]);
+}
+
+// The sums that do not depend on the lobe: D, X1, Y per group; n, Σ y, Σ y².
+Sums BaseSums(const Sample& s, const std::vector<unsigned char>& used) {
+  return SumInParts(s, [&](std::size_t begin, std::size_t end, Sums& sums) {
+    const int k = s.lights;
+    for (std::size_t p = begin; p < end; ++p) {
+      std::array<double, 12>& gp = sums.group[s.group[p]];
+      for (int j = 0; j < k; ++j) {
+        const std::size_t i = p * k + j;
+        if (!used[i]) continue;
+        const float* y = s.y(p, j);
+        const Vec3d& e = s.data->light_intensities[j];
+        for (int c = 0; c < 3; ++c) {
+          const double d = e[c] * s.diffuse[i];
+          gp[4 * c] += d * d;
+          gp[4 * c + 1] += d;
+          gp[4 * c + 3] += d * y[c];
+          sums.n1[c] += 1;
+          sums.y1[c] += y[c];
+          sums.yy[c] += double(y[c]) * y[c];
+        }
       }
     }
-  }
-  return sums;
+  });
+}
+
+// The lobe's sums for one shininess: Xs per group; Σ e s, Σ (e s)², Σ e s y. Only observations
+// with a lobe enter: where c^n < 1e-16 it is below double precision against ks and its power is
+// not taken (on a sharp lobe, most observations).
+Sums LobeSums(const Sample& s, Lobe lobe, double shininess,
+              const std::vector<unsigned char>& used) {
+  const double negligible = std::exp(std::log(1e-16) / std::max(shininess, 1e-3));
+  return SumInParts(s, [&](std::size_t begin, std::size_t end, Sums& sums) {
+    const int k = s.lights;
+    for (std::size_t p = begin; p < end; ++p) {
+      std::array<double, 12>& gp = sums.group[s.group[p]];
+      for (int j = 0; j < k; ++j) {
+        const std::size_t i = p * k + j;
+        const double cosine = s.cosine(lobe, i);
+        if (!used[i] || !(cosine > negligible)) continue;
+        const double lobe_factor = LobeFactor(cosine, shininess);
+        const float* y = s.y(p, j);
+        const Vec3d& e = s.data->light_intensities[j];
+        for (int c = 0; c < 3; ++c) {
+          const double d = e[c] * s.diffuse[i], sp = e[c] * lobe_factor;
+          gp[4 * c + 2] += d * sp;
+          sums.s1[c] += sp;
+          sums.ss[c] += sp * sp;
+          sums.ys[c] += sp * y[c];
+        }
+      }
+    }
+  });
 }
 
 // A group whose observations barely see its light (D ≈ 0) leaves its kd undetermined.
@@ -179,10 +224,10 @@ void SolveAlbedos(const Sums& sums, Coefficients* out) {
 
 }  // namespace
 
-Coefficients LinearFit(const Sample& s, Lobe lobe, double shininess,
-                       const std::vector<unsigned char>& used) {
-  const bool specular = lobe != Lobe::kLambert;
-  const Sums sums = Accumulate(s, lobe, shininess, used);
+namespace {
+
+// The least-squares coefficients from the sums of one shininess (LinearFit).
+Coefficients Solve(const Sums& sums, bool specular, double shininess) {
   Coefficients out;
   out.shininess = specular ? shininess : 0;
   for (int c = 0; c < 3; ++c) {
@@ -227,18 +272,29 @@ Coefficients LinearFit(const Sample& s, Lobe lobe, double shininess,
   return out;
 }
 
+}  // namespace
+
+Coefficients LinearFit(const Sample& s, Lobe lobe, double shininess,
+                       const std::vector<unsigned char>& used) {
+  Sums sums = BaseSums(s, used);
+  if (lobe != Lobe::kLambert) Add(LobeSums(s, lobe, shininess, used), sums);
+  return Solve(sums, lobe != Lobe::kLambert, shininess);
+}
+
 Coefficients AlbedoFit(const Sample& s, Lobe lobe, const Vec3d& ambient, const Vec3d& ks,
                        double shininess, const std::vector<unsigned char>& used) {
   Coefficients out;
   out.ambient = ambient;
   out.ks = lobe == Lobe::kLambert ? Vec3d::Zero() : ks;
   out.shininess = lobe == Lobe::kLambert ? 0 : shininess;
-  SolveAlbedos(Accumulate(s, lobe, out.shininess, used), &out);
+  Sums sums = BaseSums(s, used);
+  if (lobe != Lobe::kLambert) Add(LobeSums(s, lobe, out.shininess, used), sums);
+  SolveAlbedos(sums, &out);
   return out;
 }
 
 Coefficients ProfileFit(const Sample& s, Lobe lobe, const std::vector<unsigned char>& used,
-                        int threads, double near_shininess) {
+                        double near_shininess) {
   if (lobe == Lobe::kLambert) return LinearFit(s, lobe, 0, used);
   // n = 2^(k/2), 1 … 4096: neighbours differ by √2, finer than the profile cost's basins
   // (a lobe's width changes by 19 % a step). Near a previous answer, its ±2 steps.
@@ -249,16 +305,21 @@ Coefficients ProfileFit(const Sample& s, Lobe lobe, const std::vector<unsigned c
     first = std::clamp(k0 - 2, 0, kGrid - 1);
     last = std::clamp(k0 + 2, 0, kGrid - 1);
   }
+  // The lobe-free sums once; per shininess only the lobe's.
+  const Sums base = BaseSums(s, used);
+  auto fit = [&](double n) {
+    Sums sums = LobeSums(s, lobe, n, used);
+    Add(base, sums);
+    return Solve(sums, true, n);
+  };
   std::vector<double> cost(kGrid, INFINITY);
-  ParallelFor(first, last + 1, 1, threads, [&](std::size_t b, std::size_t e) {
-    for (std::size_t k = b; k < e; ++k) cost[k] = LinearFit(s, lobe, std::exp2(0.5 * k), used).rss;
-  });
+  for (int k = first; k <= last; ++k) cost[k] = fit(std::exp2(0.5 * k)).rss;
   const int best = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
   // Between the best grid point's neighbours the profile cost is smooth and convex in log n:
   // successive parabolic interpolation, with a golden-section step whenever the parabola's
   // vertex falls outside the bracket or too close to its middle point.
   const double step = 0.5 * std::log(2.0);
-  auto profile = [&](double log_n) { return LinearFit(s, lobe, std::exp(log_n), used).rss; };
+  auto profile = [&](double log_n) { return fit(std::exp(log_n)).rss; };
   double a = step * std::max(best - 1, first), b = step * best, c = step * std::min(best + 1, last);
   double fa = a < b ? cost[best - 1] : cost[best], fb = cost[best];
   double fc = c > b ? cost[best + 1] : cost[best];
@@ -278,7 +339,7 @@ Coefficients ProfileFit(const Sample& s, Lobe lobe, const std::vector<unsigned c
     }
     if (std::abs(u - b) < 1e-6 && it > 2) break;
   }
-  return LinearFit(s, lobe, std::exp(b), used);
+  return fit(std::exp(b));
 }
 
 Vec3d Predict(const Sample& s, Lobe lobe, const Coefficients& c, std::size_t p, int j) {

@@ -66,6 +66,7 @@ std::vector<Vec3d> PixelAlbedos(const solve::PhotometricData& data,
     Sample s;
     s.data = &data;
     s.lights = data.images;
+    s.threads = options.threads;
     for (std::size_t i = b; i < std::min(with_normal.size(), b + kChunk); ++i) {
       s.pixel.push_back(with_normal[i]);
       s.normal.push_back(normals[with_normal[i]]);
