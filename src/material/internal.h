@@ -5,6 +5,10 @@
 
 #include "material/fit.h"
 
+namespace ceres {
+class CostFunction;
+}
+
 namespace iphong::material::internal {
 
 // The fitted pixels and, per pixel and light (pixel-major), what every model needs: the diffuse
@@ -77,6 +81,12 @@ std::size_t Censor(const Sample& s, reflectance::Lobe lobe, const Coefficients& 
 
 // The model's prediction of observation (p, j): a + E_j (kd d + ks s).
 Vec3d Predict(const Sample& s, reflectance::Lobe lobe, const Coefficients& c, std::size_t p, int j);
+
+// One pixel's residuals y − a − E (kd d + ks s(n)) over `lights` (3 per light) as a Ceres cost
+// of (ambient 3, ks 3, log n 1) with kd eliminated inside, or of (…, kd 3) when not: the
+// derivatives are Ceres's automatic ones through the shared model (refine.cc).
+ceres::CostFunction* PixelCost(const Sample& s, std::size_t p, std::vector<int> lights,
+                               reflectance::Lobe lobe, bool eliminate_kd);
 
 // Ceres's refinement (refine.cc) of the coefficients `c` of a censored fit over the `used`
 // observations: (a, ks, log n) with the albedos eliminated inside each pixel's residuals

@@ -96,6 +96,22 @@ double Rss(const Sample& s, Lobe lobe, const Coefficients& c,
 
 }  // namespace
 
+ceres::CostFunction* PixelCost(const Sample& s, std::size_t p, std::vector<int> lights, Lobe lobe,
+                               bool eliminate_kd) {
+  reflectance::ModelOptions model;
+  model.lobe = lobe;
+  const int residuals = static_cast<int>(3 * lights.size());
+  if (eliminate_kd) {
+    auto* f = new EliminatedResidual;
+    f->s = &s, f->p = p, f->lights = std::move(lights), f->model = model;
+    return new ceres::AutoDiffCostFunction<EliminatedResidual, ceres::DYNAMIC, 3, 3, 1>(f,
+                                                                                        residuals);
+  }
+  auto* f = new GroupResidual;
+  f->s = &s, f->p = p, f->lights = std::move(lights), f->model = model;
+  return new ceres::AutoDiffCostFunction<GroupResidual, ceres::DYNAMIC, 3, 3, 1, 3>(f, residuals);
+}
+
 // Ceres's refinement of the censored fit and the covariance of its shared coefficients.
 ModelFit Refine(const Sample& s, Lobe lobe, bool eliminate_kd,
                 const std::vector<unsigned char>& used, int threads, Coefficients* c) {
@@ -109,8 +125,6 @@ ModelFit Refine(const Sample& s, Lobe lobe, bool eliminate_kd,
   for (int g = 0; g < s.groups; ++g) kd[g] = {c->kd[g][0], c->kd[g][1], c->kd[g][2]};
 
   ceres::Problem problem;
-  reflectance::ModelOptions model;
-  model.lobe = lobe;
   std::size_t observations = 0;
   std::vector<unsigned char> group_used(s.groups, 0);
   for (std::size_t p = 0; p < s.size(); ++p) {
@@ -122,20 +136,11 @@ ModelFit Refine(const Sample& s, Lobe lobe, bool eliminate_kd,
     }
     if (lights.empty()) continue;
     observations += 3 * lights.size();
-    const int residuals = static_cast<int>(3 * lights.size());
+    ceres::CostFunction* cost = PixelCost(s, p, std::move(lights), lobe, eliminate_kd);
     if (eliminate_kd) {
-      auto* f = new EliminatedResidual;
-      f->s = &s, f->p = p, f->lights = std::move(lights), f->model = model;
-      problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<EliminatedResidual, ceres::DYNAMIC, 3, 3, 1>(f,
-                                                                                       residuals),
-          nullptr, ambient, ks, log_n);
+      problem.AddResidualBlock(cost, nullptr, ambient, ks, log_n);
     } else {
-      auto* f = new GroupResidual;
-      f->s = &s, f->p = p, f->lights = std::move(lights), f->model = model;
-      problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<GroupResidual, ceres::DYNAMIC, 3, 3, 1, 3>(f, residuals),
-          nullptr, ambient, ks, log_n, kd[g].data());
+      problem.AddResidualBlock(cost, nullptr, ambient, ks, log_n, kd[g].data());
       group_used[g] = 1;
     }
   }
