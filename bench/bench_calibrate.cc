@@ -7,6 +7,8 @@
 //   build/bench/bench_calibrate
 #include <benchmark/benchmark.h>
 
+#include "bench_lights.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -19,16 +21,6 @@
 namespace {
 
 using namespace iphong;
-
-std::vector<Vec3d> Lights(int k) {
-  std::vector<Vec3d> lights;
-  const double golden = M_PI * (3 - std::sqrt(5.0));
-  for (int j = 0; j < k; ++j) {
-    const double z = 1 - 0.6 * (j + 0.5) / k, r = std::sqrt(1 - z * z);
-    lights.emplace_back(r * std::cos(golden * j), r * std::sin(golden * j), z);
-  }
-  return lights;
-}
 
 struct MirrorCapture {
   std::vector<ImageF> images;
@@ -43,7 +35,7 @@ const MirrorCapture& Mirror() {
     reflectance::Material m;
     m.ks = Vec3d::Constant(0.8);
     m.shininess = 500;
-    for (const Vec3d& l : Lights(96)) {
+    for (const Vec3d& l : bench::SpiralLights(96)) {
       reflectance::Lighting lighting;
       lighting.lights = {reflectance::Light::Directional(l, Rgb::Ones())};
       c.images.push_back(render::ShadeSurfaceMap(s, camera, m, lighting, {}));
@@ -105,8 +97,8 @@ solve::PhotometricData Observations(int pixels, const std::vector<Vec3d>& lights
 }
 
 void BM_Woodham(benchmark::State& state) {
-  static const solve::PhotometricData small = Observations(15000, Lights(96), true),
-                                      large = Observations(100000, Lights(96), false);
+  static const solve::PhotometricData small = Observations(15000, bench::SpiralLights(96), true),
+                                      large = Observations(100000, bench::SpiralLights(96), false);
   const solve::PhotometricData& d = state.range(1) == 15000 ? small : large;
   solve::NormalOptions o;
   o.model = reflectance::Lobe::kLambert;
@@ -121,7 +113,7 @@ BENCHMARK(BM_Woodham)
     ->UseRealTime();
 
 void BM_KnownNormals15k(benchmark::State& state) {
-  static const std::vector<Vec3d> lights = Lights(96);
+  static const std::vector<Vec3d> lights = bench::SpiralLights(96);
   static const solve::PhotometricData d = Observations(15000, lights, true);
   // As images: 15 000 × 1 pixels, one per light, and the normals they were made with.
   static const auto images = [] {
@@ -152,7 +144,7 @@ void BM_KnownNormals15k(benchmark::State& state) {
 BENCHMARK(BM_KnownNormals15k)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_EstimateIntensities100k(benchmark::State& state) {
-  static const solve::PhotometricData d = Observations(100000, Lights(96), false);
+  static const solve::PhotometricData d = Observations(100000, bench::SpiralLights(96), false);
   calibrate::IntensityOptions o;
   o.threads = static_cast<int>(state.range(0));
   for (auto _ : state) benchmark::DoNotOptimize(calibrate::EstimateIntensities(d, o));

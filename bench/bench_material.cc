@@ -7,6 +7,8 @@
 //   build/bench/bench_material
 #include <benchmark/benchmark.h>
 
+#include "bench_lights.h"
+
 #include <cmath>
 
 #include "geometry/analytic.h"
@@ -20,16 +22,6 @@ namespace {
 
 using namespace iphong;
 
-std::vector<Vec3d> Lights(int k) {
-  std::vector<Vec3d> lights;
-  const double golden = M_PI * (3 - std::sqrt(5.0));
-  for (int j = 0; j < k; ++j) {
-    const double z = 1 - 0.6 * (j + 0.5) / k, r = std::sqrt(1 - z * z);
-    lights.emplace_back(r * std::cos(golden * j), r * std::sin(golden * j), z);
-  }
-  return lights;
-}
-
 struct Capture {
   solve::PhotometricData data;
   std::vector<Vec3d> normals;
@@ -40,7 +32,7 @@ const Capture& Fifteen() {
   static const Capture c = [] {
     Capture c;
     const int pixels = 15000;
-    const std::vector<Vec3d> lights = Lights(96);
+    const std::vector<Vec3d> lights = bench::SpiralLights(96);
     solve::PhotometricData& d = c.data;
     d.width = pixels;
     d.height = 1;

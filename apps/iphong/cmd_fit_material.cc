@@ -171,24 +171,13 @@ void RunFitMaterial(const FitMaterialCommandOptions& o) {
                    o.capture.options.mask};
   io::OutputFolder out(o.output_dir, folder);
 
-  io::DatasetLoadOptions load;
-  load.capture = o.capture.resolved();
-  load.threads = o.common.threads;
-  load.memory = o.common.memory();
-  io::ObservationSet loaded;
-  {
-    Progress decode("decode", o.common.talk());
-    load.progress = [&decode](double fraction) { decode.Update(fraction); };
-    loaded = io::LoadObservations(o.dataset, load);
-  }
+  const io::ObservationSet loaded = LoadCaptureObservations(o.dataset, o.capture, o.common);
   const io::Dataset& dataset = loaded.dataset;
   const solve::PhotometricData& data = loaded.observations;
   if (std::string m = material::CheckLightCount(data.images, options); !m.empty()) {
     throw std::runtime_error(o.dataset + ": " + m);
   }
-  Say(o.common, "Read %s: %s\n", o.dataset.c_str(), io::DescribeDataset(dataset).c_str());
-  for (const std::string& warning : dataset.warnings) Warn(warning);
-  if (std::string counts = io::DescribeImageCounts(dataset); !counts.empty()) Warn(counts);
+  ReportCapture(o.dataset, dataset, o.common);
 
   std::string normals_source;
   const ImageF normal_map = LoadNormals(o, dataset, &normals_source);

@@ -80,20 +80,9 @@ void RunNormals(const NormalsCommandOptions& o) {
   folder.inputs = {o.dataset, o.capture.options.lights, o.capture.options.intensities,
                    o.capture.options.mask};
   io::OutputFolder out(o.output_dir, folder);
-  io::DatasetLoadOptions load;
-  load.capture = o.capture.resolved();
-  load.threads = o.common.threads;
-  load.memory = o.common.memory();
-  io::ObservationSet loaded;
-  {
-    Progress decode("decode", o.common.talk());
-    load.progress = [&decode](double fraction) { decode.Update(fraction); };
-    loaded = io::LoadObservations(o.dataset, load);
-  }
+  io::ObservationSet loaded = LoadCaptureObservations(o.dataset, o.capture, o.common);
   io::Dataset& dataset = loaded.dataset;
-  Say(o.common, "Read %s: %s\n", o.dataset.c_str(), io::DescribeDataset(dataset).c_str());
-  for (const std::string& warning : dataset.warnings) Warn(warning);
-  if (std::string counts = io::DescribeImageCounts(dataset); !counts.empty()) Warn(counts);
+  ReportCapture(o.dataset, dataset, o.common);
   solve::NormalOptions options;
   options.discard_dark = o.discard_dark;
   options.discard_bright = o.discard_bright;

@@ -7,6 +7,7 @@
 
 #include "core/resources.h"
 #include "io/capture.h"
+#include "io/dataset.h"
 
 namespace iphong::cli {
 
@@ -53,6 +54,14 @@ struct CaptureFlags {
   io::CaptureOptions resolved() const;
 };
 void AddCaptureOptions(CLI::App* cmd, CaptureFlags& flags);
+
+// The masked pixels of a capture folder's images as the solvers take them (io::LoadObservations),
+// with the decode progress on a terminal.
+io::ObservationSet LoadCaptureObservations(const std::string& folder, const CaptureFlags& capture,
+                                           const CommonOptions& common);
+// "Read FOLDER: what was read", then the reader's warnings and the clipped/black image counts.
+void ReportCapture(const std::string& folder, const io::Dataset& dataset,
+                   const CommonOptions& common);
 
 // printf to stdout when the run talks (not --quiet, not --json).
 void Say(const CommonOptions& common, const char* format, ...)

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "iphong/commands.h"
+#include "iphong/console.h"
 
 namespace iphong::cli {
 namespace fs = std::filesystem;
@@ -96,6 +97,28 @@ void RequireFolder(const std::string& path) {
   const fs::file_status status = fs::status(path, error);
   if (!fs::exists(status)) throw std::runtime_error(path + ": no such folder");
   if (!fs::is_directory(status)) throw std::runtime_error(path + ": is a file, not a folder");
+}
+
+}  // namespace iphong::cli
+
+namespace iphong::cli {
+
+io::ObservationSet LoadCaptureObservations(const std::string& folder, const CaptureFlags& capture,
+                                           const CommonOptions& common) {
+  io::DatasetLoadOptions load;
+  load.capture = capture.resolved();
+  load.threads = common.threads;
+  load.memory = common.memory();
+  Progress decode("decode", common.talk());
+  load.progress = [&decode](double fraction) { decode.Update(fraction); };
+  return io::LoadObservations(folder, load);
+}
+
+void ReportCapture(const std::string& folder, const io::Dataset& dataset,
+                   const CommonOptions& common) {
+  Say(common, "Read %s: %s\n", folder.c_str(), io::DescribeDataset(dataset).c_str());
+  for (const std::string& warning : dataset.warnings) Warn(warning);
+  if (std::string counts = io::DescribeImageCounts(dataset); !counts.empty()) Warn(counts);
 }
 
 }  // namespace iphong::cli
