@@ -1,5 +1,6 @@
 // `iphong fit-material DATASET --normals N -o DIR`: the material's coefficients with standard
 // errors, the model chosen by held-out lights, and pictures of the fit.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -28,6 +29,7 @@ struct FitMaterialCommandOptions {
   std::string output_dir;
   std::vector<std::string> models;
   std::string albedo = "per-pixel";
+  std::string regions;  // a label image: one kd per distinct value
   int folds = material::MaterialFitOptions{}.folds;
   int max_pixels = material::MaterialFitOptions{}.max_pixels;
   double saturation = material::MaterialFitOptions{}.saturation;
@@ -155,8 +157,9 @@ void RunFitMaterial(const FitMaterialCommandOptions& o) {
     options.models.clear();
     for (const std::string& m : o.models) options.models.push_back(reflectance::ParseLobe(m));
   }
-  options.albedo =
-      o.albedo == "uniform" ? material::AlbedoMode::kUniform : material::AlbedoMode::kPerPixel;
+  options.albedo = !o.regions.empty()      ? material::AlbedoMode::kPerRegion
+                   : o.albedo == "uniform" ? material::AlbedoMode::kUniform
+                                           : material::AlbedoMode::kPerPixel;
   options.folds = o.folds;
   options.max_pixels = o.max_pixels;
   options.saturation = o.saturation;
@@ -167,7 +170,11 @@ void RunFitMaterial(const FitMaterialCommandOptions& o) {
   io::OutputFolderOptions folder;
   folder.command = "fit-material";
   folder.overwrite = o.common.overwrite;
-  folder.inputs = {o.dataset, o.normals, o.capture.options.lights, o.capture.options.intensities,
+  folder.inputs = {o.dataset,
+                   o.normals,
+                   o.regions,
+                   o.capture.options.lights,
+                   o.capture.options.intensities,
                    o.capture.options.mask};
   io::OutputFolder out(o.output_dir, folder);
 
@@ -187,6 +194,33 @@ void RunFitMaterial(const FitMaterialCommandOptions& o) {
     normals[p] = Vec3d(n[0], n[1], n[2]);
   }
   Say(o.common, "Normals: %s\n", normals_source.c_str());
+
+  // Regions: each distinct value of the label image's first channel (0: left out), in order.
+  std::vector<float> region_values;
+  if (!o.regions.empty()) {
+    const ImageF labels = io::ReadImage(o.regions, o.common.memory());
+    if (labels.width != data.width || labels.height != data.height) {
+      throw std::runtime_error(o.regions + ": is " + SizeText(labels.width, labels.height) +
+                               ", the images are " + SizeText(data.width, data.height));
+    }
+    for (int p : data.pixels) {
+      const float v = labels.pixels[std::size_t(p) * labels.channels];
+      if (v > 0) region_values.push_back(v);
+    }
+    std::sort(region_values.begin(), region_values.end());
+    region_values.erase(std::unique(region_values.begin(), region_values.end()),
+                        region_values.end());
+    if (region_values.empty()) {
+      throw std::runtime_error(o.regions + ": no region inside the mask (every label is 0)");
+    }
+    for (int p : data.pixels) {
+      const float v = labels.pixels[std::size_t(p) * labels.channels];
+      options.region.push_back(
+          v > 0 ? static_cast<int>(std::lower_bound(region_values.begin(), region_values.end(), v) -
+                                   region_values.begin())
+                : -1);
+    }
+  }
 
   material::MaterialFit fit;
   {
@@ -214,7 +248,9 @@ void RunFitMaterial(const FitMaterialCommandOptions& o) {
   if (per_group && best.kd.size() == 1) material_json["kd"] = Triple(best.kd[0]);
   material_json["comment"] =
       "fitted by iphong fit-material; ka is the ambient term Ia*ka (Ia = 1)" +
-      std::string(per_group ? "" : "; kd varies per pixel: albedo.exr");
+      std::string(!per_group              ? "; kd varies per pixel: albedo.exr"
+                  : region_values.empty() ? ""
+                                          : "; kd varies per region: fit.json, albedo.exr");
 
   nlohmann::json report;
   report["dataset"] = o.dataset;
@@ -223,7 +259,11 @@ void RunFitMaterial(const FitMaterialCommandOptions& o) {
   report["choice"] = fit.choice_note;
   report["folds"] = options.folds;
   report["fold_of_light"] = fit.fold;
-  report["albedo"] = o.albedo;
+  report["albedo"] = o.regions.empty() ? o.albedo : "per region";
+  if (!region_values.empty()) {
+    report["regions"] = o.regions;
+    report["region_values"] = region_values;  // kd[i] belongs to the i-th value, in order
+  }
   report["pixels"] = fit.pixels;
   report["fitted_pixels"] = fit.fitted_pixels;
   report["saturated_observations"] = fit.saturated;
@@ -357,6 +397,9 @@ void AddFitMaterialCommand(CLI::App& app) {
   cmd->add_option("--albedo", o->albedo, "kd per pixel, or one for the whole object")
       ->check(CLI::IsMember({"per-pixel", "uniform"}))
       ->capture_default_str();
+  cmd->add_option("--regions", o->regions,
+                  "A label image: one kd per distinct value of its first channel (0: left out), "
+                  "the rest shared");
   cmd->add_option("--folds", o->folds,
                   "Interleaved folds of the lights for the held-out choice (light j in fold j "
                   "mod F; 2 = odd against even)")

@@ -83,6 +83,35 @@ def test_files_pictures_and_the_report(tmp_path):
     assert truth["ks"] == pytest.approx([0.4] * 3)
 
 
+def test_one_kd_per_region_of_a_label_image(tmp_path):
+    left = dict(JADE, kd=[0.7, 0.2, 0.2])
+    right = dict(JADE, kd=[0.2, 0.3, 0.8])
+    scene = tmp_path / "two.json"
+    scene.write_text(json.dumps({
+        "width": 96, "height": 64, "ambient": [1, 1, 1],
+        "camera": {"type": "orthographic", "extent": 3.0},
+        "lights": [{"type": "hemisphere", "count": 24, "min_elevation_deg": 30}],
+        "objects": [{"shape": "sphere", "radius": 0.7, "subdivisions": 6, "material": m,
+                     "transform": {"translate": [x, 0, 0]}}
+                    for m, x in ((left, -0.75), (right, 0.75))],
+        "output": {"format": "exr"}}))
+    code, _, err = run("render", scene, "-o", tmp_path / "d", "--per-light")
+    assert code == 0, err
+    labels = tmp_path / "labels.png"
+    subprocess.run(["oiiotool", "--pattern", "constant:color=0.2", "48x64", "1", "--pattern",
+                    "constant:color=0.6", "48x64", "1", "--mosaic", "2x1", "-d", "uint8", "-o",
+                    str(labels)], check=True)
+    code, _, err = run("fit-material", tmp_path / "d", "--normals", tmp_path / "d", "--regions",
+                       labels, "--model", "phong", "-o", tmp_path / "fit")
+    assert code == 0, err
+    report = json.loads((tmp_path / "fit/fit.json").read_text())
+    assert report["region_values"] == pytest.approx([0.2, 0.6], abs=0.01)
+    kd = report["models"][0]["kd"]
+    assert kd[0] == pytest.approx(left["kd"], rel=5e-3)
+    assert kd[1] == pytest.approx(right["kd"], rel=5e-3)
+    assert all(se > 0 for se in report["models"][0]["kd_se"][0])
+
+
 def test_sphere_normals_from_the_mask(tmp_path):
     render_dataset(tmp_path / "d")
     code, stdout, err = run("fit-material", tmp_path / "d", "--sphere", "-o", tmp_path / "fit",

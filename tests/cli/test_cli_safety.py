@@ -263,17 +263,23 @@ def small_disk(tmp_path):
     subprocess.run(["umount", str(tmp_path / "disk")], check=False)
 
 
-@pytest.mark.parametrize("command", ["normals", "integrate", "render"])
-def test_full_disk_fails_cleanly_and_writes_nothing(capture, tiny_disk, command):
+@pytest.mark.parametrize("command", ["normals", "integrate", "render", "fit-material", "relight"])
+def test_full_disk_fails_cleanly_and_writes_nothing(capture, tiny_disk, tmp_path, command):
     (tiny_disk / "keep.txt").write_text("already here")
     before = snapshot(tiny_disk)
+    if command == "relight":
+        code, _, err = run("normals", capture, "-o", tmp_path / "n")
+        assert code == 0, err
     args = {
         "normals": ["normals", capture],
         "integrate": ["integrate", capture, "--allow-back-facing"],
         "render": ["render", PHOTOMETRIC_SCENE, "--per-light"],
+        "fit-material": ["fit-material", capture, "--normals", capture],
+        "relight": ["relight", tmp_path / "n", "--light", "0,0,1", "--exposure", "1"],
     }[command]
-    code, _, err = run(*args, "-o", tiny_disk / "out")
-    assert_one_line_error(code, err, 4, r"disk/out/[\w.]+: cannot write: No space left on device")
+    out = tiny_disk / ("out.exr" if command == "relight" else "out")
+    code, _, err = run(*args, "-o", out)
+    assert_one_line_error(code, err, 4, r"disk/out[/.][\w.]+: cannot write: No space left on device")
     assert snapshot(tiny_disk) == before
 
 
