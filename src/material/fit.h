@@ -10,17 +10,20 @@
 //
 // The fit, per model:
 // 1. For a fixed n the model is linear in (a, kd, ks): the albedos are eliminated in closed form
-//    (a 2×2 system per channel), so a grid of n over [1, 4096] plus a golden-section step finds
-//    the global optimum of the shininess: no start can trap it.
+//    (a 2×2 system per channel), so the profile cost on a grid n = 2^(k/2) over [1, 4096],
+//    refined by parabolic interpolation, finds the global optimum of the shininess: no start can
+//    trap it.
 // 2. Shadows are censored as in normal recovery (solve/internal.h): an observation darker than
 //    the model by more than shadow_threshold × the pixel's brightness in some channel is left
 //    out (a cast shadow says only "less light arrived"); saturated observations are never used.
 // 3. Ceres refines (a, ks, log n) jointly with the albedos eliminated inside the residual
 //    (variable projection; exact derivatives through the elimination) or, for one or a few
-//    albedos, as parameters; a Huber loss at 3σ̂ keeps interreflections from pulling the fit.
-// 4. Standard errors from ceres::Covariance, scaled by σ̂² = RSS / (observations − parameters)
-//    where the eliminated albedos count as parameters: the marginal covariance of the shared
-//    coefficients (the Schur complement of the full problem). Beside them, robust (sandwich)
+//    albedos, as parameters. The loss is the censored squares of 2. (brighter observations,
+//    interreflections included, keep their weight: they are what tells a lobe from none).
+// 4. Standard errors σ̂² (JᵀJ)⁻¹ from Ceres's Jacobians at the optimum, σ̂² = RSS /
+//    (observations − parameters) where the eliminated albedos count as parameters: the marginal
+//    covariance of the shared coefficients (the Schur complement of the full problem), what
+//    ceres::Covariance gives, without its SVD of the whole Jacobian. Beside them, robust (sandwich)
 //    standard errors with the pixels as independent clusters, which stay honest where the model
 //    does not fit to the noise: on real photos they are the ones to quote.
 // Model choice: the lights are split into interleaved folds (light j in fold j mod F); each
