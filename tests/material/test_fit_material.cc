@@ -246,6 +246,50 @@ TEST(FitMaterial, ResidualDerivativesMatchFiniteDifferences) {
   }
 }
 
+// The standard errors come from one pass of Ceres's Jacobians (JᵀJ is 7×7); ceres::Covariance on
+// the same residuals at the same optimum must give the same numbers.
+TEST(FitMaterial, StandardErrorsEqualCeresCovariance) {
+  const reflectance::Material m = reflectance::FindMaterialPreset("plastic").material;
+  const Capture c = RenderSphere(m, Lobe::kPhong, Vec3d(0.3, 0.3, 0.3), 0.005, 32);
+  MaterialFitOptions options;
+  options.models = {Lobe::kPhong};
+  const MaterialFit fit = FitMaterial(c.data, c.normals, options);
+  const ModelFit& f = fit.best();
+  ASSERT_EQ(fit.censored, 0u);  // so every usable observation is in the fit
+  std::vector<std::size_t> with_normal;
+  std::vector<int> group_of;
+  const internal::Sample s =
+      internal::BuildSample(c.data, c.normals, options, &with_normal, &group_of);
+  double ambient[3] = {f.ambient_term[0], f.ambient_term[1], f.ambient_term[2]};
+  double ks[3] = {f.ks[0], f.ks[1], f.ks[2]};
+  double log_n[1] = {std::log(f.shininess)};
+  ceres::Problem problem;
+  for (std::size_t p = 0; p < s.size(); ++p) {
+    std::vector<int> lights;
+    for (int j = 0; j < s.lights; ++j) {
+      if (s.usable[p * s.lights + j]) lights.push_back(j);
+    }
+    if (lights.empty()) continue;
+    problem.AddResidualBlock(internal::PixelCost(s, p, lights, Lobe::kPhong, true), nullptr,
+                             ambient, ks, log_n);
+  }
+  ceres::Covariance::Options cov_options;
+  cov_options.algorithm_type = ceres::DENSE_SVD;
+  ceres::Covariance covariance(cov_options);
+  ASSERT_TRUE(covariance.Compute(std::vector<const double*>{ambient, ks, log_n}, &problem));
+  double block[9], n_block[1];
+  const double var = f.sigma * f.sigma;
+  covariance.GetCovarianceBlock(ks, ks, block);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_NEAR(f.ks_se[i], std::sqrt(var * block[4 * i]), 1e-6 * f.ks_se[i]);
+  covariance.GetCovarianceBlock(ambient, ambient, block);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(f.ambient_se[i], std::sqrt(var * block[4 * i]), 1e-6 * f.ambient_se[i]);
+  }
+  covariance.GetCovarianceBlock(log_n, log_n, n_block);
+  EXPECT_NEAR(f.shininess_se, f.shininess * std::sqrt(var * n_block[0]), 1e-6 * f.shininess_se);
+}
+
 TEST(FitMaterial, BadInputIsOneLine) {
   const reflectance::Material m = reflectance::FindMaterialPreset("plastic").material;
   Capture c = RenderSphere(m, Lobe::kPhong, Vec3d::Zero(), 0, 24);
