@@ -94,6 +94,79 @@ double Rss(const Sample& s, Lobe lobe, const Coefficients& c,
   return rss;
 }
 
+// One pass over the residual blocks with Ceres's Jacobians, over the parameter blocks `blocks`
+// (in that order): H = JᵀJ, the gradient Jᵀr, the sandwich's meat Σ_p g_p g_pᵀ with
+// g_p = J_p ᵀ r_p per residual block (pixel), and the cost ½ Σ r².
+struct JacobianSums {
+  Eigen::MatrixXd hessian, meat;
+  Eigen::VectorXd gradient;
+  std::vector<int> offset;  // each block's first column
+  double cost = 0;
+};
+
+JacobianSums SumJacobians(ceres::Problem& problem, const std::vector<const double*>& blocks,
+                          int threads) {
+  JacobianSums sums;
+  int size = 0;
+  for (const double* b : blocks) sums.offset.push_back(size), size += problem.ParameterBlockSize(b);
+  std::vector<ceres::ResidualBlockId> ids;
+  problem.GetResidualBlocks(&ids);
+  // The cost functions are const and thread-safe: chunks of pixels in parallel, each into its own
+  // sums, added in chunk order (so the result does not depend on the threads).
+  constexpr std::size_t kChunk = 64;
+  const std::size_t chunks = (ids.size() + kChunk - 1) / kChunk;
+  std::vector<JacobianSums> partial(chunks);
+  ParallelFor(0, ids.size(), kChunk, threads, [&](std::size_t begin, std::size_t end) {
+    JacobianSums& part = partial[begin / kChunk];
+    part.hessian = Eigen::MatrixXd::Zero(size, size);
+    part.meat = Eigen::MatrixXd::Zero(size, size);
+    part.gradient = Eigen::VectorXd::Zero(size);
+    std::vector<double> residuals;
+    std::vector<std::vector<double>> jac;
+    for (std::size_t r_id = begin; r_id < end; ++r_id) {
+      std::vector<double*> params;
+      problem.GetParameterBlocksForResidualBlock(ids[r_id], &params);
+      const ceres::CostFunction* cost = problem.GetCostFunctionForResidualBlock(ids[r_id]);
+      const int m = cost->num_residuals();
+      residuals.resize(m);
+      jac.resize(params.size());
+      std::vector<double*> jac_ptr(params.size(), nullptr);
+      std::vector<int> column(params.size(), -1);
+      for (std::size_t b = 0; b < params.size(); ++b) {
+        const auto it = std::find(blocks.begin(), blocks.end(), params[b]);
+        if (it == blocks.end()) continue;
+        column[b] = sums.offset[it - blocks.begin()];
+        jac[b].resize(m * problem.ParameterBlockSize(params[b]));
+        jac_ptr[b] = jac[b].data();
+      }
+      cost->Evaluate(params.data(), residuals.data(), jac_ptr.data());
+      Eigen::MatrixXd j_p = Eigen::MatrixXd::Zero(m, size);
+      for (std::size_t b = 0; b < params.size(); ++b) {
+        if (column[b] < 0) continue;
+        const int n = problem.ParameterBlockSize(params[b]);
+        for (int r = 0; r < m; ++r)
+          for (int k = 0; k < n; ++k) j_p(r, column[b] + k) = jac[b][r * n + k];
+      }
+      const Eigen::Map<const Eigen::VectorXd> r(residuals.data(), m);
+      const Eigen::VectorXd g = j_p.transpose() * r;
+      part.cost += 0.5 * r.squaredNorm();
+      part.gradient += g;
+      part.hessian.noalias() += j_p.transpose() * j_p;
+      part.meat.noalias() += g * g.transpose();
+    }
+  });
+  sums.hessian = Eigen::MatrixXd::Zero(size, size);
+  sums.meat = Eigen::MatrixXd::Zero(size, size);
+  sums.gradient = Eigen::VectorXd::Zero(size);
+  for (const JacobianSums& part : partial) {
+    sums.hessian += part.hessian;
+    sums.meat += part.meat;
+    sums.gradient += part.gradient;
+    sums.cost += part.cost;
+  }
+  return sums;
+}
+
 }  // namespace
 
 ceres::CostFunction* PixelCost(const Sample& s, std::size_t p, std::vector<int> lights, Lobe lobe,
@@ -156,14 +229,62 @@ ModelFit Refine(const Sample& s, Lobe lobe, bool eliminate_kd,
     problem.SetParameterBlockConstant(ks);
     problem.SetParameterBlockConstant(log_n);
   }
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  options.max_num_iterations = 50;
-  options.num_threads = ResolveThreads(threads);
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  fit.iterations = static_cast<int>(summary.iterations.size());
-  fit.converged = summary.termination_type == ceres::CONVERGENCE;
+  // The free blocks. Without a lobe (ks = 0 in every channel) the shininess is not observable:
+  // its block is held and left out, and its standard error stays NaN.
+  const bool lobe_seen = specular && c->ks.maxCoeff() > 0;
+  if (specular && !lobe_seen) problem.SetParameterBlockConstant(log_n);
+  std::vector<const double*> blocks = {ambient};
+  if (specular) blocks.push_back(ks);
+  if (lobe_seen) blocks.push_back(log_n);
+  std::vector<int> kd_block_group;
+  if (!eliminate_kd) {
+    for (int g = 0; g < s.groups; ++g) {
+      if (group_used[g]) blocks.push_back(kd[g].data()), kd_block_group.push_back(g);
+    }
+  }
+  // The profile fit is the least-squares optimum already, up to its parabolic step in n: Ceres
+  // runs only where the Gauss–Newton step from it (over the coordinates no bound holds) is longer
+  // than 0.05 standard errors. Otherwise its trust region shrinks through rejected steps, a full
+  // Jacobian each (DiLiGenT pot1's Phong: 7 iterations and 10 s for a step of 0.02 s.e.).
+  JacobianSums sums = SumJacobians(problem, blocks, threads);
+  {
+    const int size = static_cast<int>(sums.gradient.size());
+    std::vector<int> free;
+    for (int b = 0; b < static_cast<int>(blocks.size()); ++b) {
+      const int n = problem.ParameterBlockSize(blocks[b]);
+      for (int k = 0; k < n; ++k) {
+        const int i = sums.offset[b] + k;
+        const double value = blocks[b][k], g = sums.gradient[i];
+        const bool at_lower =
+            (blocks[b] == ambient || blocks[b] == ks || blocks[b] == log_n) && value <= 0 && g > 0;
+        const bool at_upper = blocks[b] == log_n && value >= std::log(8192.0) && g < 0;
+        if (!at_lower && !at_upper) free.push_back(i);
+      }
+    }
+    Eigen::MatrixXd h(free.size(), free.size());
+    Eigen::VectorXd g(free.size());
+    for (std::size_t a = 0; a < free.size(); ++a) {
+      g[a] = sums.gradient[free[a]];
+      for (std::size_t b = 0; b < free.size(); ++b) h(a, b) = sums.hessian(free[a], free[b]);
+    }
+    const double decrement =
+        size == 0 || free.empty() ? 0.0 : 0.5 * g.dot(h.completeOrthogonalDecomposition().solve(g));
+    // The Gauss–Newton step's length in standard errors: δᵀHδ/σ̂² with δ = H⁻¹g, σ̂² = 2·cost/m.
+    const double step_se = std::sqrt(2 * decrement / (2 * sums.cost / observations + 1e-300));
+    if (step_se > 0.05) {
+      ceres::Solver::Options options;
+      options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+      options.max_num_iterations = 50;
+      options.num_threads = ResolveThreads(threads);
+      ceres::Solver::Summary summary;
+      ceres::Solve(options, &problem, &summary);
+      fit.iterations = static_cast<int>(summary.iterations.size());
+      fit.converged = summary.termination_type == ceres::CONVERGENCE;
+      sums = SumJacobians(problem, blocks, threads);
+    } else {
+      fit.converged = true;  // the profile fit's optimum; no Ceres iteration needed
+    }
+  }
 
   c->ambient = Vec3d(ambient[0], ambient[1], ambient[2]);
   c->ks = specular ? Vec3d(ks[0], ks[1], ks[2]) : Vec3d::Zero();
@@ -188,64 +309,14 @@ ModelFit Refine(const Sample& s, Lobe lobe, bool eliminate_kd,
   fit.bic = observations * std::log(std::max(c->rss, 1e-300) / observations) +
             fit.parameters * std::log(static_cast<double>(observations));
 
-  // The covariance of the free blocks: σ̂² (JᵀJ)⁻¹. Without a lobe (ks = 0 in every channel) the
-  // shininess is not observable: its block is held and left out, and its standard error stays NaN.
-  const bool lobe_seen = specular && c->ks.maxCoeff() > 0;
-  if (specular && !lobe_seen) problem.SetParameterBlockConstant(log_n);
-  std::vector<const double*> blocks = {ambient};
-  if (specular) blocks.push_back(ks);
-  if (lobe_seen) blocks.push_back(log_n);
-  std::vector<int> kd_block_group;
-  if (!eliminate_kd) {
-    for (int g = 0; g < s.groups; ++g) {
-      if (group_used[g]) blocks.push_back(kd[g].data()), kd_block_group.push_back(g);
-    }
-  }
-  // One pass over the pixels' residual blocks with Ceres's Jacobians gives H = JᵀJ over the free
-  // blocks and the sandwich's meat Σ_p g_p g_pᵀ, g_p = J_pᵀ r_p. C = H⁻¹ is what
+  // The covariance of the free blocks: σ̂² H⁻¹ with H = JᵀJ from the Jacobian pass. It is what
   // ceres::Covariance computes, but its dense SVD of the whole m × 7 Jacobian (4.5 million rows
   // on DiLiGenT's ball) took 60 % of the run; H is 7 × 7. Rank deficient (H's reciprocal
   // condition number below 1e-14): no standard errors.
-  int size = 0;
-  std::vector<int> offset;
-  for (const double* b : blocks) offset.push_back(size), size += problem.ParameterBlockSize(b);
-  Eigen::MatrixXd hessian = Eigen::MatrixXd::Zero(size, size);
-  Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(size, size);
-  {
-    std::vector<ceres::ResidualBlockId> ids;
-    problem.GetResidualBlocks(&ids);
-    std::vector<double> residuals;
-    std::vector<std::vector<double>> jac;
-    for (ceres::ResidualBlockId id : ids) {
-      std::vector<double*> params;
-      problem.GetParameterBlocksForResidualBlock(id, &params);
-      const int m = problem.GetCostFunctionForResidualBlock(id)->num_residuals();
-      residuals.resize(m);
-      jac.resize(params.size());
-      std::vector<double*> jac_ptr(params.size(), nullptr);
-      std::vector<int> column(params.size(), -1);
-      for (std::size_t b = 0; b < params.size(); ++b) {
-        const auto it = std::find(blocks.begin(), blocks.end(), params[b]);
-        if (it == blocks.end()) continue;
-        column[b] = offset[it - blocks.begin()];
-        jac[b].resize(m * problem.ParameterBlockSize(params[b]));
-        jac_ptr[b] = jac[b].data();
-      }
-      double cost = 0;
-      problem.EvaluateResidualBlock(id, false, &cost, residuals.data(), jac_ptr.data());
-      Eigen::MatrixXd j_p = Eigen::MatrixXd::Zero(m, size);
-      for (std::size_t b = 0; b < params.size(); ++b) {
-        if (column[b] < 0) continue;
-        const int n = problem.ParameterBlockSize(params[b]);
-        for (int r = 0; r < m; ++r)
-          for (int k = 0; k < n; ++k) j_p(r, column[b] + k) = jac[b][r * n + k];
-      }
-      const Eigen::VectorXd g =
-          j_p.transpose() * Eigen::Map<const Eigen::VectorXd>(residuals.data(), m);
-      hessian.noalias() += j_p.transpose() * j_p;
-      meat.noalias() += g * g.transpose();
-    }
-  }
+  const int size = static_cast<int>(sums.gradient.size());
+  const std::vector<int>& offset = sums.offset;
+  const Eigen::MatrixXd& hessian = sums.hessian;
+  const Eigen::MatrixXd& meat = sums.meat;
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(hessian, Eigen::ComputeFullU | Eigen::ComputeFullV);
   const Eigen::VectorXd singular = svd.singularValues();
   fit.covariance_ok = std::isfinite(fit.sigma) && size > 0 && singular[size - 1] > 0 &&
