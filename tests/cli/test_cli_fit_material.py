@@ -112,6 +112,19 @@ def test_one_kd_per_region_of_a_label_image(tmp_path):
     assert all(se > 0 for se in report["models"][0]["kd_se"][0])
 
 
+def test_normals_from_an_iphong_normals_output_folder(tmp_path):
+    render_dataset(tmp_path / "d")
+    code, _, err = run("normals", tmp_path / "d", "-o", tmp_path / "n")  # its material.json: exact
+    assert code == 0, err
+    code, stdout, err = run("fit-material", tmp_path / "d", "--normals", tmp_path / "n", "-o",
+                            tmp_path / "fit")
+    assert code == 0, err
+    assert f"Normals: {tmp_path / 'n'}/normals.exr" in stdout
+    material = json.loads((tmp_path / "fit/material.json").read_text())
+    assert material["shininess"] == pytest.approx(20, rel=5e-3)
+    assert material["ks"] == pytest.approx([0.4] * 3, rel=5e-3)
+
+
 def test_sphere_normals_from_the_mask(tmp_path):
     render_dataset(tmp_path / "d")
     code, stdout, err = run("fit-material", tmp_path / "d", "--sphere", "-o", tmp_path / "fit",
