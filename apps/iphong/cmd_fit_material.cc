@@ -399,7 +399,7 @@ void AddFitMaterialCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--regions", o->regions,
                   "A label image: one kd per distinct value of its first channel (0: left out), "
-                  "the rest shared");
+                  "ks and the shininess shared (instead of --albedo)");
   cmd->add_option("--folds", o->folds,
                   "Interleaved folds of the lights for the held-out choice (light j in fold j "
                   "mod F; 2 = odd against even)")
