@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <limits>
 #include <map>
 #include <stdexcept>
 
@@ -222,10 +221,6 @@ void SolveAlbedos(const Sums& sums, Coefficients* out) {
   }
 }
 
-}  // namespace
-
-namespace {
-
 // The least-squares coefficients from the sums of one shininess (LinearFit).
 Coefficients Solve(const Sums& sums, bool specular, double shininess) {
   Coefficients out;
@@ -272,13 +267,18 @@ Coefficients Solve(const Sums& sums, bool specular, double shininess) {
   return out;
 }
 
+// All the sums of one shininess.
+Sums AllSums(const Sample& s, Lobe lobe, double shininess, const std::vector<unsigned char>& used) {
+  Sums sums = BaseSums(s, used);
+  if (lobe != Lobe::kLambert) Add(LobeSums(s, lobe, shininess, used), sums);
+  return sums;
+}
+
 }  // namespace
 
 Coefficients LinearFit(const Sample& s, Lobe lobe, double shininess,
                        const std::vector<unsigned char>& used) {
-  Sums sums = BaseSums(s, used);
-  if (lobe != Lobe::kLambert) Add(LobeSums(s, lobe, shininess, used), sums);
-  return Solve(sums, lobe != Lobe::kLambert, shininess);
+  return Solve(AllSums(s, lobe, shininess, used), lobe != Lobe::kLambert, shininess);
 }
 
 Coefficients AlbedoFit(const Sample& s, Lobe lobe, const Vec3d& ambient, const Vec3d& ks,
@@ -287,9 +287,7 @@ Coefficients AlbedoFit(const Sample& s, Lobe lobe, const Vec3d& ambient, const V
   out.ambient = ambient;
   out.ks = lobe == Lobe::kLambert ? Vec3d::Zero() : ks;
   out.shininess = lobe == Lobe::kLambert ? 0 : shininess;
-  Sums sums = BaseSums(s, used);
-  if (lobe != Lobe::kLambert) Add(LobeSums(s, lobe, out.shininess, used), sums);
-  SolveAlbedos(sums, &out);
+  SolveAlbedos(AllSums(s, lobe, out.shininess, used), &out);
   return out;
 }
 
@@ -344,10 +342,11 @@ Coefficients ProfileFit(const Sample& s, Lobe lobe, const std::vector<unsigned c
 
 Vec3d Predict(const Sample& s, Lobe lobe, const Coefficients& c, std::size_t p, int j) {
   const std::size_t i = p * s.lights + j;
-  const double lobe_factor =
-      lobe == Lobe::kLambert ? 0.0 : LobeFactor(s.cosine(lobe, i), c.shininess);
+  reflectance::LightFactors<double> f;
+  f.diffuse = s.diffuse[i];
+  f.specular = lobe == Lobe::kLambert ? 0.0 : LobeFactor(s.cosine(lobe, i), c.shininess);
   const Vec3d& e = s.data->light_intensities[j];
-  return c.ambient + e.cwiseProduct(c.kd[s.group[p]] * s.diffuse[i] + c.ks * lobe_factor);
+  return c.ambient + reflectance::CombineFactors(f, e, e, c.kd[s.group[p]], c.ks);
 }
 
 std::size_t Censor(const Sample& s, Lobe lobe, const Coefficients& c,

@@ -34,7 +34,10 @@ std::vector<LobeBin> LobeBins(const Sample& s, const Coefficients& c, Lobe lobe,
       const int b = static_cast<int>(angle / range * kBins);
       if (b >= kBins) continue;
       const Vec3d& e = s.data->light_intensities[j];
-      const Vec3d diffuse = c.ambient + e.cwiseProduct(c.kd[s.group[p]]) * s.diffuse[i];
+      reflectance::LightFactors<double> diffuse_only;  // the model without its lobe
+      diffuse_only.diffuse = s.diffuse[i];
+      const Vec3d diffuse =
+          c.ambient + reflectance::CombineFactors(diffuse_only, e, e, c.kd[s.group[p]], c.ks);
       const Vec3d y = Eigen::Vector3f(s.y(p, j)).cast<double>();
       const double v = solve::internal::Luminance(y - diffuse) /
                        solve::internal::Luminance(e.cwiseProduct(c.ks));

@@ -1,5 +1,5 @@
 // Ceres's refinement of a model's censored least-squares fit, and the covariance of its shared
-// coefficients (ceres::Covariance), scaled by the residual variance.
+// coefficients from one pass of Ceres's Jacobians, scaled by the residual variance.
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
@@ -39,28 +39,35 @@ struct PixelResidual {
         if (c > 0) lobe[i] = reflectance::LobePower(T(c), T(0), n, model);
       }
     }
+    // kd: the block, or per channel the least-squares value for the current (a, ks, n).
+    Vec3T<T> kd_vec;
     for (int c = 0; c < 3; ++c) {
-      T kdc;
       if (kd) {
-        kdc = kd[c];
-      } else {
-        T num(0);
-        double den = 0;
-        for (std::size_t i = 0; i < m; ++i) {
-          const int j = lights[i];
-          const double ed = s->data->light_intensities[j][c] * s->diffuse[p * s->lights + j];
-          const double e = s->data->light_intensities[j][c];
-          num += ed * (T(double(s->y(p, j)[c])) - ambient[c] - e * ks[c] * lobe[i]);
-          den += ed * ed;
-        }
-        kdc = den > 1e-8 ? num / den : T(0);
+        kd_vec[c] = kd[c];
+        continue;
       }
+      T num(0);
+      double den = 0;
       for (std::size_t i = 0; i < m; ++i) {
         const int j = lights[i];
         const double e = s->data->light_intensities[j][c];
-        const double d = s->diffuse[p * s->lights + j];
-        r[3 * i + c] = T(double(s->y(p, j)[c])) - ambient[c] - e * (kdc * d + ks[c] * lobe[i]);
+        const double ed = e * s->diffuse[p * s->lights + j];
+        num += ed * (T(double(s->y(p, j)[c])) - ambient[c] - e * ks[c] * lobe[i]);
+        den += ed * ed;
       }
+      kd_vec[c] = den > 1e-8 ? num / den : T(0);
+    }
+    // Each observation against the shared model's combination of the factors.
+    const Vec3T<T> a(ambient[0], ambient[1], ambient[2]), k_s(ks[0], ks[1], ks[2]);
+    for (std::size_t i = 0; i < m; ++i) {
+      const int j = lights[i];
+      reflectance::LightFactors<T> f;
+      f.diffuse = T(s->diffuse[p * s->lights + j]);
+      f.specular = lobe[i];
+      const Vec3T<T> e = s->data->light_intensities[j].template cast<T>();
+      const Vec3T<T> model_value = a + reflectance::CombineFactors<T>(f, e, e, kd_vec, k_s);
+      const float* y = s->y(p, j);
+      for (int c = 0; c < 3; ++c) r[3 * i + c] = T(double(y[c])) - model_value[c];
     }
     return true;
   }
