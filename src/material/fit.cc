@@ -8,7 +8,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "core/parallel.h"
 #include "material/internal.h"
 #include "reflectance/material.h"
 #include "solve/internal.h"
@@ -214,8 +213,13 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
       const double se = n > 1 ? std::sqrt(std::max(0.0, sum2 / n - mean * mean) / (n - 1)) : 0;
       note << reflectance::LobeName(options.models[best]) << " predicts held-out lights with RMSE "
            << result.models[best].heldout_rmse << " against Lambert's "
-           << result.models[l].heldout_rmse << " (paired difference " << mean / se
-           << " standard errors over " << n << " pixels)";
+           << result.models[l].heldout_rmse << " (paired difference ";
+      if (se > 0) {
+        note << mean / se << " standard errors";
+      } else {
+        note << mean << ", the same at every pixel";
+      }
+      note << " over " << n << " pixels)";
       // And by 1 % of Lambert's RMSE: four more coefficients for less is not a highlight (on
       // exact Lambertian renders a lobe fits float rounding: 2.903e-8 against 2.904e-8).
       if (!(mean > 2 * se) ||
@@ -245,12 +249,16 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
       if (chosen.kd_known[group_of[p]]) result.albedo[p] = chosen.kd[group_of[p]];
     }
   }
-  for (std::size_t m = 0; m < models; ++m) {
-    if (options.models[m] == Lobe::kLambert) continue;
-    if (result.lobe_model < 0 || static_cast<int>(m) == result.chosen ||
-        (options.models[result.chosen] == Lobe::kLambert &&
-         result.models[m].heldout_rmse < result.models[result.lobe_model].heldout_rmse)) {
-      if (result.lobe_model != result.chosen) result.lobe_model = static_cast<int>(m);
+  // The lobe to show: the chosen model's, or where Lambert won the best-predicting lobe's.
+  if (options.models[result.chosen] != Lobe::kLambert) {
+    result.lobe_model = result.chosen;
+  } else {
+    for (std::size_t m = 0; m < models; ++m) {
+      if (options.models[m] == Lobe::kLambert) continue;
+      if (result.lobe_model < 0 ||
+          result.models[m].heldout_rmse < result.models[result.lobe_model].heldout_rmse) {
+        result.lobe_model = static_cast<int>(m);
+      }
     }
   }
   if (result.lobe_model >= 0) {

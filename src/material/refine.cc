@@ -123,31 +123,39 @@ JacobianSums SumJacobians(ceres::Problem& problem, const std::vector<const doubl
   constexpr std::size_t kChunk = 64;
   const std::size_t chunks = (ids.size() + kChunk - 1) / kChunk;
   std::vector<JacobianSums> partial(chunks);
+  // The longest residual block, so one Jacobian buffer per chunk serves every pixel.
+  int longest = 0;
+  for (ceres::ResidualBlockId id : ids) {
+    longest = std::max(longest, problem.GetCostFunctionForResidualBlock(id)->num_residuals());
+  }
   ParallelFor(0, ids.size(), kChunk, threads, [&](std::size_t begin, std::size_t end) {
     JacobianSums& part = partial[begin / kChunk];
     part.hessian = Eigen::MatrixXd::Zero(size, size);
     part.meat = Eigen::MatrixXd::Zero(size, size);
     part.gradient = Eigen::VectorXd::Zero(size);
-    std::vector<double> residuals;
+    std::vector<double*> params;
+    std::vector<double> residuals(longest);
+    Eigen::MatrixXd j_all(longest, size);
     std::vector<std::vector<double>> jac;
+    std::vector<double*> jac_ptr;
+    std::vector<int> column;
     for (std::size_t r_id = begin; r_id < end; ++r_id) {
-      std::vector<double*> params;
       problem.GetParameterBlocksForResidualBlock(ids[r_id], &params);
       const ceres::CostFunction* cost = problem.GetCostFunctionForResidualBlock(ids[r_id]);
       const int m = cost->num_residuals();
-      residuals.resize(m);
       jac.resize(params.size());
-      std::vector<double*> jac_ptr(params.size(), nullptr);
-      std::vector<int> column(params.size(), -1);
+      jac_ptr.assign(params.size(), nullptr);
+      column.assign(params.size(), -1);
       for (std::size_t b = 0; b < params.size(); ++b) {
         const auto it = std::find(blocks.begin(), blocks.end(), params[b]);
         if (it == blocks.end()) continue;
         column[b] = sums.offset[it - blocks.begin()];
-        jac[b].resize(m * problem.ParameterBlockSize(params[b]));
+        jac[b].resize(longest * problem.ParameterBlockSize(params[b]));
         jac_ptr[b] = jac[b].data();
       }
       cost->Evaluate(params.data(), residuals.data(), jac_ptr.data());
-      Eigen::MatrixXd j_p = Eigen::MatrixXd::Zero(m, size);
+      auto j_p = j_all.topRows(m);
+      j_p.setZero();
       for (std::size_t b = 0; b < params.size(); ++b) {
         if (column[b] < 0) continue;
         const int n = problem.ParameterBlockSize(params[b]);
