@@ -11,6 +11,7 @@
 #include "arrays.h"
 #include "bindings.h"
 #include "io/dataset.h"
+#include "io/files.h"
 #include "io/image_io.h"
 #include "io/mesh_io.h"
 #include "io/output_folder.h"
@@ -21,12 +22,6 @@ namespace py = pybind11;
 
 namespace iphong::python {
 namespace {
-
-std::string Extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
 
 ImageF ToSingle(const py::object& value, const char* what) {
   auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
@@ -66,7 +61,7 @@ void BindIo(py::module_& m) {
         const ImageF normals = ToImage(normals_in, "normals");
         const Mask mask = mask_in.is_none() ? NonZeroPixels(normals)
                                             : ToMask(mask_in, normals.width, normals.height);
-        const std::string ext = Extension(path);
+        const std::string ext = io::LowerExtension(path);
         if (ext != ".exr" && ext != ".png" && ext != ".tif" && ext != ".tiff") {
           throw std::invalid_argument(path +
                                       ": expected .exr or .tif (float xyz) or .png (picture)");
@@ -107,7 +102,7 @@ void BindIo(py::module_& m) {
           albedo = ToImage(albedo_in, "albedo");
           RequireSize(albedo, height.width, height.height, "albedo");
         }
-        const std::string ext = Extension(path);
+        const std::string ext = io::LowerExtension(path);
         if (ext != ".ply" && ext != ".obj") {
           throw std::invalid_argument(path + ": expected .ply or .obj");
         }

@@ -32,16 +32,10 @@ struct RelightCommandOptions {
   CommonOptions common;
 };
 
-std::string Extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
-
 void RunRelight(const RelightCommandOptions& o) {
   const auto start = Clock::now();
   RequireFolder(o.result_dir);
-  const std::string ext = Extension(o.output);
+  const std::string ext = io::LowerExtension(o.output);
   if (o.viewer ? ext != ".html" : (ext != ".png" && ext != ".exr")) {
     throw CLI::ValidationError("--output", o.viewer ? "the viewer is a page: name it .html"
                                                     : "the image is .png (sRGB) or .exr (linear)");

@@ -10,6 +10,10 @@
 
 namespace iphong::io {
 
+// The extension of `path`, lower case, with its dot (".exr"; "" when there is none): what the
+// readers and writers choose a format by.
+std::string LowerExtension(const std::string& path);
+
 // Throws std::runtime_error "PATH: no such file" / "PATH: is a folder, not a file" / "PATH: not
 // a regular file" unless `path` is a regular file (symbolic links followed). Returns its size.
 std::uint64_t RequireRegularFile(const std::string& path);

@@ -18,9 +18,7 @@ namespace fs = std::filesystem;
 namespace {
 
 bool IsFloatFormat(const fs::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
+  const std::string ext = LowerExtension(path.string());
   return ext == ".exr" || ext == ".hdr" || ext == ".pfm";
 }
 

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "io/dataset.h"
+#include "io/files.h"
 #include "io/image_io.h"
 #include "render/preview.h"
 
@@ -46,8 +47,7 @@ ImageF NormalsFromPicture(const ImageF& picture, bool directx, Mask* mask) {
 }
 
 ImageF ReadNormalMap(const std::string& path, bool directx, Mask* mask, const MemoryLimit& memory) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = LowerExtension(path);
   if (ext == ".mat") return ReadNormalMat(path, "Normal_gt");
   ImageF image = ReadImage(path, memory);
   if (image.channels < 3) {
