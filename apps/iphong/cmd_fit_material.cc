@@ -74,6 +74,15 @@ ImageF LoadNormals(const FitMaterialCommandOptions& o, const io::Dataset& datase
   if (std::filesystem::is_directory(path)) {
     if (std::filesystem::exists(path + "/normals.exr")) {
       path += "/normals.exr";
+    } else if (std::error_code ec; std::filesystem::equivalent(path, o.dataset, ec)) {
+      // The capture's own ground truth, read with it (and cropped and scaled as it was).
+      if (dataset.normal_gt.pixels.empty()) {
+        throw std::runtime_error(path +
+                                 ": no normals.exr and no ground truth (Normal_gt.mat or "
+                                 "normal.txt)");
+      }
+      *source = dataset.files.ground_truth_path;
+      normals = dataset.normal_gt;
     } else {
       io::DatasetLoadOptions load;
       load.capture = o.capture.resolved();
