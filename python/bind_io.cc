@@ -70,7 +70,7 @@ void BindIo(py::module_& m) {
           throw std::invalid_argument("convention must be 'opengl' or 'directx'");
         }
         py::gil_scoped_release release;
-        io::WriteSingleOutputFile(path, overwrite, {}, [&](const std::string& temp) {
+        io::WriteSingleOutputFile("python", path, overwrite, {}, [&](const std::string& temp) {
           if (ext == ".png") {
             io::WriteImage(temp, io::NormalMapPicture(normals, mask, convention == "directx"),
                            {16, io::Encoding::kLinear});
@@ -120,7 +120,7 @@ void BindIo(py::module_& m) {
           if (built.mesh.triangles.empty()) {
             throw std::invalid_argument("height: no 2x2 block of finite heights inside the mask");
           }
-          io::WriteSingleOutputFile(path, overwrite, {}, [&](const std::string& temp) {
+          io::WriteSingleOutputFile("python", path, overwrite, {}, [&](const std::string& temp) {
             io::SaveMesh(temp, built.mesh, built.colors.empty() ? nullptr : &built.colors);
           });
         }

@@ -343,8 +343,8 @@ void RunEval(const EvalOptions& o) {
   }
   const solve::AngularErrorMetrics m = solve::CompareNormals(estimate, truth, mask);
   if (!o.error_map.empty()) {
-    io::WriteSingleOutputFile(o.error_map, o.common.overwrite, {o.estimate, o.ground_truth, o.mask},
-                              [&](const std::string& temp) {
+    io::WriteSingleOutputFile("eval", o.error_map, o.common.overwrite,
+                              {o.estimate, o.ground_truth, o.mask}, [&](const std::string& temp) {
                                 io::WriteErrorMap(temp, m.error_deg, mask,
                                                   io::ErrorMapScale(m.error_deg, mask));
                               });

@@ -120,17 +120,18 @@ void RunRelight(const RelightCommandOptions& o) {
   const std::vector<std::string> inputs = {dir, o.material};
   if (o.viewer) {
     const std::string page = io::ViewerPage(input, std::filesystem::path(dir).filename().string());
-    io::WriteSingleOutputFile(o.output, o.common.overwrite, inputs,
+    io::WriteSingleOutputFile("relight", o.output, o.common.overwrite, inputs,
                               [&](const std::string& temp) { io::WriteTextFile(temp, page); });
   } else {
     const ImageF image = render::Relight(input);
-    io::WriteSingleOutputFile(o.output, o.common.overwrite, inputs, [&](const std::string& temp) {
-      if (ext == ".png") {
-        io::WriteImage(temp, image, {8, io::Encoding::kSrgb});
-      } else {
-        io::WriteImage(temp, image);
-      }
-    });
+    io::WriteSingleOutputFile("relight", o.output, o.common.overwrite, inputs,
+                              [&](const std::string& temp) {
+                                if (ext == ".png") {
+                                  io::WriteImage(temp, image, {8, io::Encoding::kSrgb});
+                                } else {
+                                  io::WriteImage(temp, image);
+                                }
+                              });
   }
   Say(o.common, "Relit %s (%s) under %zu light(s), exposure %.4g: wrote %s (%.2f s)\n", dir.c_str(),
       described.c_str(), input.lights.size(), input.exposure, o.output.c_str(),

@@ -345,7 +345,7 @@ void AbandonOutputFolders() {
   for (auto& [key, abandon] : Outputs().abandon) abandon();
 }
 
-void WriteSingleOutputFile(const std::string& path, bool overwrite,
+void WriteSingleOutputFile(const std::string& command, const std::string& path, bool overwrite,
                            const std::vector<std::string>& inputs,
                            const std::function<void(const std::string& temp)>& write) {
   const fs::path target = Resolve(path);
@@ -364,6 +364,22 @@ void WriteSingleOutputFile(const std::string& path, bool overwrite,
   if (fs::is_directory(status)) Refuse(path + ": is a folder; name a file for the output");
   if (fs::exists(status) && !overwrite) {
     Refuse(path + ": exists; pass --overwrite to replace it, or name a new file");
+  }
+  // Replacing: only a file iphong wrote there, unchanged since (the folder's manifest says so).
+  const fs::path folder = target.parent_path();
+  const std::string name = target.filename().string();
+  auto listed = [&](const Manifest& manifest) {
+    for (const auto& [cmd, files] : manifest) {
+      const auto it = files.find(name);
+      if (it != files.end() && Unchanged(target, it->second)) return true;
+    }
+    return false;
+  };
+  const bool manifest_exists = fs::exists(folder / kManifest, error);
+  if (fs::exists(status) && !(manifest_exists && listed(ReadManifest(folder)))) {
+    Refuse(path +
+           ": exists and was not written by iphong (or was changed since); iphong replaces only "
+           "its own files: name a new file");
   }
   // The extension stays last: writers pick the format from it.
   const fs::path temp = target.parent_path() / ("." + target.stem().string() + kPartial +
@@ -397,7 +413,20 @@ void WriteSingleOutputFile(const std::string& path, bool overwrite,
     ::unlink(temp.c_str());
   }
   partial.path.clear();
-  SyncFolder(target.parent_path().string());
+  // List it, so a later --overwrite may replace it: the manifest is rewritten whole and renamed
+  // into place, keeping what other commands listed.
+  struct stat st {};
+  if (::lstat(target.c_str(), &st) == 0) {
+    Manifest manifest = fs::exists(folder / kManifest, error) ? ReadManifest(folder) : Manifest{};
+    manifest[command][name] = {static_cast<std::uint64_t>(st.st_size), MtimeNs(st)};
+    const fs::path staged = folder / (std::string(kManifest) + kPartial + PartialSuffix());
+    WriteFileVerified(staged.string(), ManifestText(manifest));
+    if (::rename(staged.c_str(), (folder / kManifest).c_str()) != 0) {
+      ::unlink(staged.c_str());
+      Refuse((folder / kManifest).string() + ": cannot update: " + std::strerror(errno));
+    }
+  }
+  SyncFolder(folder.string());
 }
 
 }  // namespace iphong::io

@@ -96,11 +96,14 @@ void FinishInterruptedCommit(const std::string& folder);
 // names the file where the user will look for it ("out/normals.exr").
 std::string WithoutStagingNames(const std::string& message);
 
-// A single output file (`eval --error-map`): `write` writes it, verified, at the temporary path it
-// is given; then it takes `path`'s name. Without `overwrite` an existing `path` is an error and
-// is never replaced; `path` may not be one of `inputs` nor lie inside an input folder, even with
-// `overwrite`. Throws OutputError.
-void WriteSingleOutputFile(const std::string& path, bool overwrite,
+// A single output file (`eval --error-map`, `relight -o`): `write` writes it, verified, at the
+// temporary path it is given; then it takes `path`'s name and is listed under `command` in the
+// manifest of its folder, as output folders are. Without `overwrite` an existing `path` is an
+// error and is never replaced; with it, only a file the manifest lists (iphong wrote it) and that
+// nobody changed since is replaced, so a user's photo named by mistake stays as it is. `path` may
+// not be one of `inputs` nor lie inside an input folder, even with `overwrite`. Throws
+// OutputError.
+void WriteSingleOutputFile(const std::string& command, const std::string& path, bool overwrite,
                            const std::vector<std::string>& inputs,
                            const std::function<void(const std::string& temp)>& write);
 

@@ -126,4 +126,11 @@ def test_bad_inputs(capture, tmp_path):
                    r"\.html")
     out.write_bytes(b"a user's file")
     assert_refused(tmp_path, ["relight", n, "--light", "0,0,1", "-o", out], 4, r"exists")
+    # --overwrite replaces only iphong's own earlier output, never a user's file of that name.
+    assert_refused(tmp_path, ["relight", n, "--light", "0,0,1", "-o", out, "--overwrite"], 4,
+                   r"was not written by iphong")
     assert out.read_bytes() == b"a user's file"
+    mine = tmp_path / "relit.png"
+    for light in ("0,0,1", "0.5,0,0.87"):
+        code, _, err = run("relight", n, "--light", light, "-o", mine, "--overwrite")
+        assert code == 0, err

@@ -251,22 +251,50 @@ TEST_F(OutputFolderTest, SingleFilesAreNewUnlessOverwrite) {
   auto write = [&](const std::string& text) {
     return [text](const std::string& temp) { WriteTextFile(temp, text); };
   };
-  WriteSingleOutputFile(Path("map.png"), false, {}, write("one"));
+  WriteSingleOutputFile("test", Path("map.png"), false, {}, write("one"));
   EXPECT_EQ(Read(Path("map.png")), "one");
   EXPECT_NE(ErrorOf([&] {
-              WriteSingleOutputFile(Path("map.png"), false, {}, write("two"));
+              WriteSingleOutputFile("test", Path("map.png"), false, {}, write("two"));
             }).find("exists; pass --overwrite"),
             std::string::npos);
-  WriteSingleOutputFile(Path("map.png"), true, {}, write("three"));
+  WriteSingleOutputFile("test", Path("map.png"), true, {}, write("three"));
   EXPECT_EQ(Read(Path("map.png")), "three");
   EXPECT_NE(ErrorOf([&] {
-              WriteSingleOutputFile(Path("map.png"), true, {Path("map.png")}, write("four"));
+              WriteSingleOutputFile("test", Path("map.png"), true, {Path("map.png")},
+                                    write("four"));
             }).find("is an input"),
             std::string::npos);
-  EXPECT_THROW(WriteSingleOutputFile(Path("bad.png"), false, {},
+  EXPECT_THROW(WriteSingleOutputFile("test", Path("bad.png"), false, {},
                                      [](const std::string&) { throw OutputError("disk full"); }),
                OutputError);
-  EXPECT_EQ(Names(dir_.string()), (std::set<std::string>{"map.png"}));
+  EXPECT_EQ(Names(dir_.string()), (std::set<std::string>{"map.png", ".iphong-manifest.json"}));
+}
+
+// --overwrite replaces only what iphong wrote there and nobody changed since: a user's file of
+// the same name (a photo named by mistake) stays, byte for byte.
+TEST_F(OutputFolderTest, OverwriteReplacesOnlyIphongsOwnSingleFiles) {
+  auto write = [&](const std::string& text) {
+    return [text](const std::string& temp) { WriteTextFile(temp, text); };
+  };
+  WriteTextFile(Path("photo.png"), "the user's photo");
+  EXPECT_NE(ErrorOf([&] {
+              WriteSingleOutputFile("test", Path("photo.png"), true, {}, write("relit"));
+            }).find("was not written by iphong"),
+            std::string::npos);
+  EXPECT_EQ(Read(Path("photo.png")), "the user's photo");
+  // An iphong file the user edited since is theirs now.
+  WriteSingleOutputFile("test", Path("relit.png"), false, {}, write("one"));
+  WriteSingleOutputFile("other", Path("map.png"), false, {}, write("map"));
+  std::filesystem::remove(Path("relit.png"));
+  WriteTextFile(Path("relit.png"), "edited by the user");
+  EXPECT_NE(ErrorOf([&] {
+              WriteSingleOutputFile("test", Path("relit.png"), true, {}, write("two"));
+            }).find("was not written by iphong"),
+            std::string::npos);
+  EXPECT_EQ(Read(Path("relit.png")), "edited by the user");
+  // Both commands' files stay listed: each may be replaced.
+  WriteSingleOutputFile("test", Path("map.png"), true, {}, write("map 2"));
+  EXPECT_EQ(Read(Path("map.png")), "map 2");
 }
 
 }  // namespace
