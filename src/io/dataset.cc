@@ -17,6 +17,7 @@
 #include "core/image_ops.h"
 #include "core/parallel.h"
 #include "io/capture.h"
+#include "io/dataset_internal.h"
 #include "io/dataset_text.h"
 #include "io/files.h"
 #include "io/json_reader.h"
@@ -27,20 +28,11 @@ namespace iphong::io {
 namespace fs = std::filesystem;
 namespace {
 
+using internal::ToRgb;
+
 [[noreturn]] void Fail(const fs::path& file, const std::string& message, int line = 0) {
   throw std::runtime_error(file.string() + (line > 0 ? ":" + std::to_string(line) : "") + ": " +
                            message);
-}
-
-ImageF ToRgb(ImageF image) {
-  if (image.channels == 3) return image;
-  ImageF rgb(image.width, image.height, 3);
-  for (std::size_t p = 0; p < image.pixel_count(); ++p) {
-    for (int c = 0; c < 3; ++c) {
-      rgb.pixels[3 * p + c] = image.pixels[p * image.channels + (image.channels >= 3 ? c : 0)];
-    }
-  }
-  return rgb;
 }
 
 // One image of a dataset, refused from its header when its size is not the dataset's
@@ -226,14 +218,20 @@ ImageF ReadNormalMat(const std::string& path, const std::string& variable) {
 namespace {
 
 // A dataset without its images, plus what turns a decoded file into a working image.
-struct Prepared {
-  Dataset d;
-  PixelRect crop;  // width 0 = none
-  Mask file_mask;  // the mask at the files' resolution, cropped: where pixels are counted
-  bool srgb = false;
-  bool integer_files = true;       // saturation exists only for integer code values
-  std::size_t counted_pixels = 0;  // file_mask.count(): every image's counts are out of it
-};
+}  // namespace
+
+namespace internal {
+
+ImageF ToRgb(ImageF image) {
+  if (image.channels == 3) return image;
+  ImageF rgb(image.width, image.height, 3);
+  for (std::size_t p = 0; p < image.pixel_count(); ++p) {
+    for (int c = 0; c < 3; ++c) {
+      rgb.pixels[3 * p + c] = image.pixels[p * image.channels + (image.channels >= 3 ? c : 0)];
+    }
+  }
+  return rgb;
+}
 
 Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options) {
   const fs::path dir(directory);
@@ -346,6 +344,13 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
   d.image_counts.assign(d.filenames.size(), {});
   return p;
 }
+
+}  // namespace internal
+
+namespace {
+
+using internal::Prepare;
+using internal::Prepared;
 
 // Image j at the working size: decoded, cropped, counted, linearized, downscaled.
 ImageF ReadWorkingImage(const Prepared& p, std::size_t j, const std::string& reference,

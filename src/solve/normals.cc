@@ -38,21 +38,32 @@ PixelFitSettings FitSettingsOf(const NormalOptions& o) {
   return s;
 }
 
-// The per-pixel median of each channel of the pixels' ks: the object's typical coefficient.
-Vec3d MedianKs(const std::vector<PixelSolution>& solutions) {
+// The per-channel median of the pixels' ks: the object's typical coefficient.
+Vec3d MedianKs(const std::vector<Vec3f>& ks) {
   Vec3d out = Vec3d::Zero();
-  std::vector<double> v;
-  v.reserve(solutions.size());
+  if (ks.empty()) return out;
+  std::vector<double> v(ks.size());
   for (int c = 0; c < 3; ++c) {
-    v.clear();
-    for (const PixelSolution& s : solutions) {
-      if (s.status == PixelStatus::kSolved) v.push_back(s.specular[c]);
-    }
-    if (v.empty()) continue;
+    for (std::size_t i = 0; i < ks.size(); ++i) v[i] = ks[i][c];
     std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
     out[c] = v[v.size() / 2];
   }
   return out;
+}
+
+// The specular coefficients of the solved pixels among `sample` (positions in data's order).
+std::vector<Vec3f> SampleSpecular(const NormalResult& result, const PhotometricData& data,
+                                  const std::vector<std::size_t>& sample) {
+  std::vector<Vec3f> ks;
+  if (result.specular.pixels.empty()) return ks;
+  ks.reserve(sample.size());
+  for (std::size_t i : sample) {
+    const std::size_t p = static_cast<std::size_t>(data.pixels[i]);
+    if (result.residual.pixels[p] < 0) continue;
+    const float* v = result.specular.pixels.data() + 3 * p;
+    ks.emplace_back(v[0], v[1], v[2]);
+  }
+  return ks;
 }
 
 }  // namespace
@@ -70,6 +81,7 @@ std::string NormalOptions::Validate() const {
     return "search candidates must be in 16..100000";
   }
   if (model_sample < 1) return "model sample must be >= 1";
+  if (plan_sample < 1) return "plan sample must be >= 1";
   if (!ambient_term.allFinite() || (ambient_term.array() < 0).any()) {
     return "ambient term must be finite and >= 0";
   }
@@ -79,21 +91,85 @@ std::string NormalOptions::Validate() const {
   return "";
 }
 
-NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& options) {
+std::vector<std::size_t> PlanSampleIndices(std::size_t masked_pixels, std::size_t plan_sample) {
+  std::vector<std::size_t> indices;
+  const std::size_t n = std::min(masked_pixels, plan_sample);
+  indices.reserve(n);
+  // i·M/n, exact in integers: ascending, distinct, spread evenly, all pixels when n = M.
+  for (std::size_t i = 0; i < n; ++i) {
+    indices.push_back(
+        static_cast<std::size_t>((static_cast<unsigned __int128>(i) * masked_pixels) / n));
+  }
+  return indices;
+}
+
+PhotometricData SubsetObservations(const PhotometricData& data,
+                                   const std::vector<std::size_t>& indices) {
+  PhotometricData out;
+  out.width = data.width;
+  out.height = data.height;
+  out.images = data.images;
+  out.light_directions = data.light_directions;
+  out.light_intensities = data.light_intensities;
+  const std::size_t values = static_cast<std::size_t>(data.images) * 3;
+  out.pixels.reserve(indices.size());
+  out.values.reserve(indices.size() * values);
+  for (std::size_t i : indices) {
+    if (i >= data.pixel_count()) throw std::invalid_argument("sample index beyond the pixels");
+    out.pixels.push_back(data.pixels[i]);
+    out.values.insert(out.values.end(), data.pixel(i), data.pixel(i) + values);
+  }
+  return out;
+}
+
+namespace {
+
+void CheckInputs(const PhotometricData& data, const NormalOptions& options) {
   if (auto m = data.Validate(); !m.empty()) throw std::invalid_argument(m);
   if (auto m = options.Validate(); !m.empty()) throw std::invalid_argument(m);
   if (data.images < 3) {
     throw std::invalid_argument("per-pixel photometric stereo needs at least 3 images, got " +
                                 std::to_string(data.images));
   }
+}
+
+}  // namespace
+
+NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& options) {
+  CheckInputs(sample, options);
+  NormalPlan plan;
+  plan.options = options;
+  plan.requested_model = options.model;
+  NormalOptions& o = plan.options;
+  if (o.model == reflectance::Lobe::kLambert || o.material_known) return plan;
+  const auto start = Clock::now();
+  ModelChoiceSettings choice;
+  choice.fit = FitSettingsOf(o);
+  choice.sample = o.model_sample;
+  choice.search_candidates = o.search_candidates;
+  choice.threads = o.threads;
+  plan.model_choice = ChooseModel(
+      sample, ModelFamily(o.choose_model ? std::nullopt : std::optional(o.model)), choice);
+  o.model = plan.model_choice.chosen.lobe;
+  o.shininess = plan.model_choice.chosen.shininess;
+  o.ambient_term = plan.model_choice.chosen.ambient_term;
+  plan.model_seconds = SecondsSince(start);
+  return plan;
+}
+
+NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan& plan) {
+  const NormalOptions& o = plan.options;
+  CheckInputs(data, o);
   const std::size_t pixels = data.pixel_count();
   std::vector<PixelSolution> solutions(pixels);
   NormalResult result;
   result.summary.pixels = pixels;
-  NormalOptions o = options;
+  result.summary.model_seconds = plan.model_seconds;
+  result.model_choice = plan.model_choice;
   std::vector<signed char> won;  // per_pixel_model: which model each pixel chose (1: specular)
+  bool per_pixel_map = false;    // model_map made (on every piece, even one with no pixel)
 
-  if (o.model == reflectance::Lobe::kLambert) {
+  if (plan.requested_model == reflectance::Lobe::kLambert) {
     const auto start = Clock::now();
     const Eigen::Matrix3Xd pinv = WoodhamPseudoInverse(data);
     const WoodhamSettings woodham = WoodhamOf(o);
@@ -105,26 +181,11 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
     });
     result.summary.init_seconds = SecondsSince(start);
   } else {
-    // The model: known, or chosen by held-out prediction.
-    if (!o.material_known) {
-      const auto start = Clock::now();
-      ModelChoiceSettings choice;
-      choice.fit = FitSettingsOf(o);
-      choice.sample = o.model_sample;
-      choice.search_candidates = o.search_candidates;
-      choice.threads = o.threads;
-      result.model_choice = ChooseModel(
-          data, ModelFamily(o.choose_model ? std::nullopt : std::optional(o.model)), choice);
-      o.model = result.model_choice.chosen.lobe;
-      o.shininess = result.model_choice.chosen.shininess;
-      o.ambient_term = result.model_choice.chosen.ambient_term;
-      result.summary.model_seconds = SecondsSince(start);
-    }
     const auto start = Clock::now();
     PixelFitSettings fit = FitSettingsOf(o);
     // The search runs on luminance: the known ks enters as its luminance.
     const double ks_luminance = internal::Luminance(o.ks);
-    if (const ModelCandidate& m = result.model_choice.chosen;
+    if (const ModelCandidate& m = plan.model_choice.chosen;
         !o.material_known && m.ks_prior_weight > 0) {
       fit.ks_prior = m.ks_prior;
       fit.ks_prior_weight = m.ks_prior_weight;
@@ -134,7 +195,7 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
     const CandidateTable table(data.light_directions, model, o.shininess, o.search_candidates);
     const WoodhamSettings woodham = WoodhamOf(o);
     // The per-pixel choice between Lambert and the object's model, on the choice's halves.
-    const std::vector<int>& fold = result.model_choice.fold;
+    const std::vector<int>& fold = plan.model_choice.fold;
     const bool per_pixel = !o.material_known && o.per_pixel_model &&
                            o.model != reflectance::Lobe::kLambert && !fold.empty();
     std::optional<CandidateTable> lambert_table;
@@ -142,6 +203,7 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
     lambert_fit.model.lobe = reflectance::Lobe::kLambert;
     lambert_fit.ks_prior.reset();
     won.assign(per_pixel ? pixels : 0, -1);
+    per_pixel_map = per_pixel;
     if (per_pixel) {
       reflectance::ModelOptions lambert;
       lambert.lobe = reflectance::Lobe::kLambert;
@@ -219,20 +281,7 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
   result.shininess = o.shininess;
   result.ambient_term = o.ambient_term;
   const bool specular = o.model != reflectance::Lobe::kLambert;
-  if (o.material_known) {
-    result.ks = o.ks;
-  } else if (options.model != reflectance::Lobe::kLambert) {
-    result.material_estimated = specular;
-    result.specular_identifiable = specular;
-    result.ks = MedianKs(solutions);
-    result.specular_note =
-        specular ? "model chosen by held-out prediction (" + result.model_choice.note +
-                       "); ks per pixel in specular.exr, this is their median"
-                 : "no specular model predicts held-out observations better than Lambert's (" +
-                       result.model_choice.note + ")";
-  }
-
-  if (!won.empty()) {
+  if (per_pixel_map) {
     result.model_map = ImageF(data.width, data.height, 1, -1.0f);
     for (std::size_t i = 0; i < pixels; ++i) {
       if (solutions[i].status == PixelStatus::kSolved) {
@@ -263,6 +312,36 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
       "solved " +
       std::to_string(pixels - result.summary.dark_pixels - result.summary.underdetermined_pixels) +
       " of " + std::to_string(pixels) + " pixels";
+  return result;
+}
+
+void FinishNormals(NormalResult& result, const NormalPlan& plan,
+                   const std::vector<Vec3f>& sample_ks) {
+  const NormalOptions& o = plan.options;
+  const bool specular = o.model != reflectance::Lobe::kLambert;
+  if (o.material_known) {
+    result.ks = o.ks;
+  } else if (plan.requested_model != reflectance::Lobe::kLambert) {
+    result.material_estimated = specular;
+    result.specular_identifiable = specular;
+    result.ks = MedianKs(sample_ks);
+    result.specular_note =
+        specular ? "model chosen by held-out prediction (" + plan.model_choice.note +
+                       "); ks per pixel in specular.exr, this is their median"
+                 : "no specular model predicts held-out observations better than Lambert's (" +
+                       plan.model_choice.note + ")";
+  }
+}
+
+NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& options) {
+  CheckInputs(data, options);
+  const std::vector<std::size_t> sample =
+      PlanSampleIndices(data.pixel_count(), options.plan_sample);
+  const NormalPlan plan = sample.size() == data.pixel_count()
+                              ? PlanNormals(data, options)
+                              : PlanNormals(SubsetObservations(data, sample), options);
+  NormalResult result = SolveNormalsWithPlan(data, plan);
+  FinishNormals(result, plan, SampleSpecular(result, data, sample));
   return result;
 }
 

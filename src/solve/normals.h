@@ -47,6 +47,10 @@ struct NormalOptions {
   // the narrowest lobe the choice offers is wide.
   int search_candidates = 1000;
   int model_sample = 300;  // pixels the model choice scores
+  // Pixels the whole-object decisions see (PlanSampleIndices): the model choice scores
+  // model_sample of them and the ambient estimate is a quartile over them, so 2^17 costs nothing
+  // in accuracy and keeps a capture of any size to a fixed first pass.
+  std::size_t plan_sample = 131072;
   // Estimated coefficients: each pixel also chooses between Lambert and the object's specular
   // model by its own held-out prediction (the same halves of the lights), so a region the
   // specular model does not predict better — dark, or matte on a glossy object — is Lambertian.
@@ -103,8 +107,43 @@ struct NormalResult {
   NormalSummary summary;
 };
 
-// Throws std::invalid_argument for invalid data or options (one-line message).
+// Throws std::invalid_argument for invalid data or options (one-line message). The same as
+// PlanNormals on the plan sample, SolveNormalsWithPlan on every pixel and FinishNormals.
 NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& options);
+
+// The same recovery in pieces — bands of rows streamed from the files, Dask blocks — with the
+// same result as in one piece. What the whole object decides (the model, its shininess, the
+// ambient term, the ks prior, the folds) is decided once on the plan sample; then every pixel is
+// fitted on its own with it, so a pixel's result depends on its own observations and the plan
+// only, never on which piece it came in.
+
+// The plan sample: every masked pixel up to NormalOptions::plan_sample (every DiLiGenT object),
+// else that many at an even stride over the masked pixels in row-major order.
+// Positions, in the masked-pixel order, of the plan sample's pixels (ascending).
+std::vector<std::size_t> PlanSampleIndices(std::size_t masked_pixels, std::size_t plan_sample);
+// The observations of the pixels at `indices` (positions in data's masked-pixel order).
+PhotometricData SubsetObservations(const PhotometricData& data,
+                                   const std::vector<std::size_t>& indices);
+
+struct NormalPlan {
+  NormalOptions options;  // as asked, with the model, shininess and ambient term decided
+  reflectance::Lobe requested_model = reflectance::Lobe::kPhong;
+  ModelChoice model_choice;  // estimated coefficients: every model's held-out score
+  double model_seconds = 0;
+};
+
+// The whole-object decisions, from the plan sample's observations. Throws
+// std::invalid_argument for invalid data or options.
+NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& options);
+
+// Every pixel of `data` fitted with the plan (images of data.width × data.height). The
+// whole-object summaries — ks, material_estimated, the notes — are left to FinishNormals.
+NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan& plan);
+
+// Fills the whole-object summaries: ks is the per-channel median of the specular coefficients
+// of the solved plan-sample pixels (`sample_ks`, one per such pixel); known ks when known.
+void FinishNormals(NormalResult& result, const NormalPlan& plan,
+                   const std::vector<Vec3f>& sample_ks);
 
 // Any number of images: EstimateNormals for three or more; for one or two the global solver with
 // priors (EstimateNormalsFewImages), which needs the coefficients known (material_known) and

@@ -1,0 +1,27 @@
+// Pieces of the dataset reader shared by io/dataset.cc and io/capture_bands.cc (not public).
+#pragma once
+
+#include <string>
+
+#include "core/image_ops.h"
+#include "io/dataset.h"
+
+namespace iphong::io::internal {
+
+// A dataset found and checked, its images not read: the files, the mask (at the working size),
+// the ground truth when asked, and how each image is brought to the working size.
+struct Prepared {
+  Dataset d;
+  PixelRect crop;  // width 0 = none
+  Mask file_mask;  // the mask at the files' resolution, cropped: where pixels are counted
+  bool srgb = false;
+  bool integer_files = true;       // saturation exists only for integer code values
+  std::size_t counted_pixels = 0;  // file_mask.count(): every image's counts are out of it
+};
+
+Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options);
+
+// Gray (one channel) to RGB by repetition; RGBA loses A.
+ImageF ToRgb(ImageF image);
+
+}  // namespace iphong::io::internal

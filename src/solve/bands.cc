@@ -1,0 +1,96 @@
+#include "solve/bands.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "core/timing.h"
+
+namespace iphong::solve {
+
+NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
+                                    const NormalOptions& options,
+                                    const std::function<void(int, const NormalResult&)>& write,
+                                    const BandProgress& progress) {
+  if (auto m = options.Validate(); !m.empty()) throw std::invalid_argument(m);
+  if (band_rows < 1 || source.width < 1 || source.height < 1 || !source.read) {
+    throw std::invalid_argument("bands need a size, a reader and at least one row each");
+  }
+  const std::vector<std::size_t> sample =
+      PlanSampleIndices(source.masked_pixels, options.plan_sample);
+
+  // Pass 1: the plan sample's observations, in the masked-pixel order EstimateNormals uses.
+  const auto start = Clock::now();
+  PhotometricData sampled;
+  std::size_t position = 0;  // masked pixels before this band
+  auto next = sample.begin();
+  for (int y0 = 0; y0 < source.height; y0 += band_rows) {
+    const int y1 = std::min(source.height, y0 + band_rows);
+    const PhotometricData band = source.read(y0, y1, true);
+    if (y0 == 0) {
+      sampled.width = source.width;
+      sampled.height = source.height;
+      sampled.images = band.images;
+      sampled.light_directions = band.light_directions;
+      sampled.light_intensities = band.light_intensities;
+    }
+    const std::size_t values = static_cast<std::size_t>(band.images) * 3;
+    for (; next != sample.end() && *next < position + band.pixel_count(); ++next) {
+      const std::size_t i = *next - position;
+      sampled.pixels.push_back(band.pixels[i] + y0 * source.width);
+      sampled.values.insert(sampled.values.end(), band.pixel(i), band.pixel(i) + values);
+    }
+    position += band.pixel_count();
+    if (progress.rows) progress.rows(1, y1);
+  }
+  if (position != source.masked_pixels) {
+    throw std::invalid_argument("the bands hold " + std::to_string(position) +
+                                " masked pixels, the source said " +
+                                std::to_string(source.masked_pixels));
+  }
+  const double sample_seconds = SecondsSince(start);
+  const NormalPlan plan = PlanNormals(sampled, options);
+  sampled = PhotometricData();  // freed before the fit
+
+  // Pass 2: every band with the plan; the sample pixels' ks for the object's median.
+  NormalResult total;
+  total.summary.init_seconds = sample_seconds;
+  total.summary.model_seconds = plan.model_seconds;
+  std::vector<Vec3f> sample_ks;
+  position = 0;
+  next = sample.begin();
+  for (int y0 = 0; y0 < source.height; y0 += band_rows) {
+    const int y1 = std::min(source.height, y0 + band_rows);
+    const PhotometricData band = source.read(y0, y1, false);
+    NormalResult r = SolveNormalsWithPlan(band, plan);
+    for (; next != sample.end() && *next < position + band.pixel_count(); ++next) {
+      const std::size_t p = static_cast<std::size_t>(band.pixels[*next - position]);
+      if (r.specular.pixels.empty() || r.residual.pixels[p] < 0) continue;
+      const float* v = r.specular.pixels.data() + 3 * p;
+      sample_ks.emplace_back(v[0], v[1], v[2]);
+    }
+    position += band.pixel_count();
+    NormalSummary& s = total.summary;
+    s.solve_seconds += r.summary.solve_seconds + r.summary.init_seconds;
+    s.iterations += r.summary.iterations;
+    s.pixels += r.summary.pixels;
+    s.dark_pixels += r.summary.dark_pixels;
+    s.underdetermined_pixels += r.summary.underdetermined_pixels;
+    if (y0 == 0) {
+      total.model = r.model;
+      total.shininess = r.shininess;
+      total.ambient_term = r.ambient_term;
+      total.model_choice = r.model_choice;
+    }
+    write(y0, r);
+    if (progress.rows) progress.rows(2, y1);
+  }
+  FinishNormals(total, plan, sample_ks);
+  NormalSummary& s = total.summary;
+  s.success = true;
+  s.message = "solved " + std::to_string(s.pixels - s.dark_pixels - s.underdetermined_pixels) +
+              " of " + std::to_string(s.pixels) + " pixels in bands of " +
+              std::to_string(band_rows) + " rows";
+  return total;
+}
+
+}  // namespace iphong::solve

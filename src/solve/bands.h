@@ -1,0 +1,38 @@
+// Normal recovery in bands of rows, for captures whose observations do not fit in memory: the
+// whole-object decisions (normals.h: PlanNormals) on the plan sample drawn in a first pass over
+// the bands, then every band fitted with that plan and handed on as soon as it is done. The
+// result is bit for bit the one EstimateNormals gives on the whole capture (the same sample, the
+// same plan, and each pixel fitted on its own observations alone), whatever the band height.
+//
+// The numerical core reads no files: `read` supplies a band's observations (PhotometricData of
+// width × (y1 − y0), pixel indices within the band) and `write` takes its results.
+#pragma once
+
+#include <functional>
+
+#include "solve/normals.h"
+
+namespace iphong::solve {
+
+struct BandSource {
+  int width = 0;
+  int height = 0;
+  std::size_t masked_pixels = 0;  // over the whole image: the plan sample is drawn from them
+  // Observations of rows [y0, y1). Called once per band in each of two passes, top to bottom.
+  std::function<PhotometricData(int y0, int y1, bool first_pass)> read;
+};
+
+struct BandProgress {
+  // Called with the pass (1: drawing the plan sample, 2: fitting) and the rows done.
+  std::function<void(int pass, int rows_done)> rows;
+};
+
+// Calls `write(y0, band)` for each band in order, band the results of rows [y0, y0 + rows) as
+// SolveNormalsWithPlan gives them. Returns the whole-object result without images: the model,
+// ks (FinishNormals), the summed summary. Throws std::invalid_argument as EstimateNormals.
+NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
+                                    const NormalOptions& options,
+                                    const std::function<void(int y0, const NormalResult&)>& write,
+                                    const BandProgress& progress = {});
+
+}  // namespace iphong::solve
