@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "calibrate/lights.h"
+#include "core/errors.h"
 #include "core/timing.h"
 #include "integrate/integrate.h"
 #include "io/dataset.h"
@@ -17,29 +18,13 @@
 #include "io/visualize.h"
 #include "iphong/commands.h"
 #include "iphong/console.h"
+#include "iphong/normals_command.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
 
 namespace iphong::cli {
-namespace {
 
-struct NormalsCommandOptions {
-  std::string dataset;
-  std::string output_dir;
-  std::optional<std::string> model;
-  bool ignore_material = false;
-  double discard_dark = 0.3, discard_bright = 0.1;
-  std::string convention = "opengl";
-  double shadow_threshold = solve::NormalOptions{}.shadow_threshold;
-  int irls_rounds = solve::NormalOptions{}.irls_rounds;
-  bool fast = false;
-  bool integrate = false;
-  bool estimate_intensities = false;
-  CaptureFlags capture;
-  CommonOptions common;
-};
-
-nlohmann::json InputJson(const io::Dataset& d) {
+nlohmann::json NormalsInputJson(const io::Dataset& d) {
   nlohmann::json counts = nlohmann::json::array();
   for (std::size_t j = 0; j < d.image_counts.size(); ++j) {
     counts.push_back({{"file", d.filenames[j]},
@@ -59,6 +44,31 @@ nlohmann::json InputJson(const io::Dataset& d) {
           {"ground_truth", d.files.ground_truth_path},
           {"images", counts}};
 }
+
+solve::NormalOptions NormalOptionsFor(const NormalsCommandOptions& o, const io::Dataset& d) {
+  solve::NormalOptions options;
+  options.discard_dark = o.discard_dark;
+  options.discard_bright = o.discard_bright;
+  options.threads = o.common.threads;
+  options.shadow_threshold = o.shadow_threshold;
+  options.irls_rounds = o.irls_rounds;
+  options.color_residuals = !o.fast;
+  if (d.material && !o.ignore_material) {
+    options.model = d.material->model;
+    options.material_known = true;
+    options.ambient_term = d.material->ambient.cwiseProduct(d.material->material.ka);
+    options.ks = d.material->material.ks;
+    options.shininess = d.material->material.shininess;
+    if (d.material->kd_known) options.known_albedo = d.material->material.kd;
+  }
+  if (o.model) {
+    options.model = reflectance::ParseLobe(*o.model);
+    options.choose_model = false;  // the user's lobe: only its shininess is chosen
+  }
+  return options;
+}
+
+namespace {
 
 nlohmann::json MetricsJson(const solve::AngularErrorMetrics& m) {
   return {{"evaluated_pixels", m.pixels},
@@ -80,28 +90,35 @@ void RunNormals(const NormalsCommandOptions& o) {
   folder.inputs = {o.dataset, o.capture.options.lights, o.capture.options.intensities,
                    o.capture.options.mask};
   io::OutputFolder out(o.output_dir, folder);
+  {
+    // The capture's headers and mask first: when its observations and results would not fit in
+    // the memory limit, it is solved in bands of rows instead, with the same result.
+    io::DatasetLoadOptions load;
+    load.capture = o.capture.resolved();
+    load.threads = o.common.threads;
+    load.memory = o.common.memory();
+    io::CaptureBands capture(o.dataset, load);
+    const NormalsMemory memory =
+        EstimateNormalsMemory(capture, NormalOptionsFor(o, capture.dataset()), o.common.threads);
+    const double limit = static_cast<double>(load.memory.resolved());
+    if (memory.whole_bytes > limit || o.band_rows > 0) {
+      const int rows = o.band_rows > 0 ? std::min(o.band_rows, capture.height())
+                                       : memory.BandRows(limit, capture.height());
+      if (rows < 1) {
+        throw ResourceError(o.dataset + ": one row of " + SizeText(capture.width(), 1) + " x " +
+                            std::to_string(capture.dataset().filenames.size()) + " images needs " +
+                            FormatBytes(memory.fixed_bytes + memory.per_row_bytes) +
+                            ", more than the memory limit of " + FormatBytes(limit) +
+                            " (raise it with --memory-limit)");
+      }
+      RunNormalsInBands(o, out, capture, rows, memory, SecondsSince(total_start));
+      return;
+    }
+  }
   io::ObservationSet loaded = LoadCaptureObservations(o.dataset, o.capture, o.common);
   io::Dataset& dataset = loaded.dataset;
   ReportCapture(o.dataset, dataset, o.common);
-  solve::NormalOptions options;
-  options.discard_dark = o.discard_dark;
-  options.discard_bright = o.discard_bright;
-  options.threads = o.common.threads;
-  options.shadow_threshold = o.shadow_threshold;
-  options.irls_rounds = o.irls_rounds;
-  options.color_residuals = !o.fast;
-  if (dataset.material && !o.ignore_material) {
-    options.model = dataset.material->model;
-    options.material_known = true;
-    options.ambient_term = dataset.material->ambient.cwiseProduct(dataset.material->material.ka);
-    options.ks = dataset.material->material.ks;
-    options.shininess = dataset.material->material.shininess;
-    if (dataset.material->kd_known) options.known_albedo = dataset.material->material.kd;
-  }
-  if (o.model) {
-    options.model = reflectance::ParseLobe(*o.model);
-    options.choose_model = false;  // the user's lobe: only its shininess is chosen
-  }
+  solve::NormalOptions options = NormalOptionsFor(o, dataset);
   auto fit_progress = std::make_shared<Progress>("fit", o.common.talk());
   options.progress = [fit_progress](double fraction) { fit_progress->Update(fraction); };
 
@@ -135,7 +152,7 @@ void RunNormals(const NormalsCommandOptions& o) {
 
   nlohmann::json metrics;
   metrics["dataset"] = o.dataset;
-  metrics["input"] = InputJson(dataset);
+  metrics["input"] = NormalsInputJson(dataset);
   metrics["pixels"] = data.pixel_count();
   metrics["images"] = data.images;
   metrics["model"] = reflectance::LobeName(result.model);
@@ -396,6 +413,10 @@ void AddNormalsCommand(CLI::App& app) {
                 "Estimate each light's RGB intensity with the normals (semi-calibrated; the "
                 "intensity file is not used; written as light_intensities.txt, each channel's "
                 "mean 1)");
+  cmd->add_option("--band-rows", o->band_rows,
+                  "Read and solve the capture in bands of this many rows (default: only when it "
+                  "does not fit in --memory-limit, in bands that do; the result is the same)")
+      ->check(CLI::Range(1, 1 << 30));
   cmd->add_flag("--integrate", o->integrate,
                 "Also integrate the normals: height.exr, mesh.ply (albedo colours), height.png");
   AddCaptureOptions(cmd, o->capture);

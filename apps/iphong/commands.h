@@ -19,7 +19,7 @@ constexpr int kExitOutput = 4;     // the output cannot be written (folder refus
 constexpr int kExitInternal = 70;  // a bug in iphong
 constexpr const char* kExitCodes =
     "Exit codes: 0 done; 1 bad input (a file or value); 2 bad command line; 3 over the memory "
-    "limit (--max-memory); 4 output not written (folder refused, disk full); 70 internal error; "
+    "limit (--memory-limit); 4 output not written (folder refused, disk full); 70 internal error; "
     "130/143 interrupted (SIGINT/SIGTERM). An error is one line on stderr, naming the file; a "
     "failed or interrupted run leaves its output folder as it was.";
 

@@ -30,9 +30,10 @@ void AddThreadsOption(CLI::App* cmd, CommonOptions& common) {
 }
 
 void AddMemoryOption(CLI::App* cmd, CommonOptions& common) {
-  cmd->add_option("--max-memory", common.max_memory_gb,
-                  "Refuse work that needs more memory than this many GB (default: 3/4 of the "
-                  "machine's)")
+  cmd->add_option("--memory-limit,--max-memory", common.max_memory_gb,
+                  "Memory to stay within, in GB (default: 3/4 of the machine's, or of ulimit -v): "
+                  "work that needs more is refused before it starts, except normals, which "
+                  "then reads and solves the capture in bands of rows that fit")
       ->check(Positive());
 }
 

@@ -64,7 +64,8 @@ int main(int argc, char** argv) {
   } catch (const iphong::OutputError& e) {
     code = Fail(e.what(), iphong::cli::kExitOutput);
   } catch (const std::bad_alloc&) {
-    code = Fail("out of memory (lower --max-memory, or free memory)", iphong::cli::kExitResources);
+    code =
+        Fail("out of memory (lower --memory-limit, or free memory)", iphong::cli::kExitResources);
   } catch (const std::invalid_argument& e) {
     code = Fail(e.what(), iphong::cli::kExitInput);
   } catch (const std::logic_error& e) {

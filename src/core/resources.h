@@ -11,13 +11,13 @@ namespace iphong {
 
 struct MemoryLimit {
   std::uint64_t bytes = 0;  // 0 = DefaultMemoryLimitBytes()
-  // How the user raises it, quoted in the refusal ("--max-memory" on the command line,
+  // How the user raises it, quoted in the refusal ("--memory-limit" on the command line,
   // "max_memory_gb=" in Python).
-  std::string knob = "--max-memory";
+  std::string knob = "--memory-limit";
 
   std::uint64_t resolved() const;
   // "" when `needed` bytes fit; else "WHAT needs 79.1 GB, more than the memory limit of 17.6 GB
-  // (raise it with --max-memory)".
+  // (raise it with --memory-limit)".
   std::string Check(double needed, const std::string& what) const;
 };
 

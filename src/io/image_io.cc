@@ -11,6 +11,7 @@
 
 #include "core/errors.h"
 #include "io/files.h"
+#include "io/image_internal.h"
 
 namespace iphong::io {
 namespace fs = std::filesystem;
@@ -62,6 +63,16 @@ std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHead
 }
 
 }  // namespace
+
+namespace internal {
+
+std::unique_ptr<OIIO::ImageInput> OpenImageChecked(const std::string& path, ImageHeader* header) {
+  return OpenChecked(path, header);
+}
+
+bool IsFloatImagePath(const std::string& path) { return IsFloatFormat(path); }
+
+}  // namespace internal
 
 float LinearToSrgb(float linear) {
   const float x = std::clamp(linear, 0.0f, 1.0f);

@@ -291,7 +291,7 @@ def small_height(tmp_path_factory):
     (["normals"], 2, r"dataset is required"),
     (["frobnicate"], 2, r"frobnicate: no such command"),
     (["normals", "ds", "-o", "out", "--threads", "100000"], 2, r"--threads: Value 100000"),
-    (["normals", "ds", "-o", "out", "--max-memory", "-1"], 2, r"--max-memory"),
+    (["normals", "ds", "-o", "out", "--max-memory", "-1"], 2, r"--(memory-limit|max-memory)"),
     (["normals", "ds", "-o", "out", "--max-memory", "0.0001"], 3, r"more than the memory limit"),
     (["normals", "nowhere", "-o", "out"], 1, r"nowhere: no such folder"),
     (["normals", "ds/001.png", "-o", "out"], 1, r"ds/001\.png: is a file, not a folder"),

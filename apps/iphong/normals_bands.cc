@@ -1,0 +1,257 @@
+// `iphong normals` on a capture larger than the memory limit: solve/bands.h over io::CaptureBands,
+// every result written a band at a time (io::ImageRowWriter), so neither the observations nor the
+// outputs are ever whole in memory.
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "core/errors.h"
+#include "core/parallel.h"
+#include "core/timing.h"
+#include "io/files.h"
+#include "io/image_rows.h"
+#include "io/visualize.h"
+#include "iphong/console.h"
+#include "iphong/normals_command.h"
+#include "render/preview.h"
+#include "solve/bands.h"
+
+namespace iphong::cli {
+namespace {
+
+// The process itself: OpenImageIO, Ceres, OpenCV and the C++ runtime, measured at about 140 MB
+// of resident memory before the first image is read.
+constexpr double kProcessBytes = 200e6;
+// Per working pixel of a band beyond its observations: the fitted results (11 floats), the
+// per-pixel solutions of the fit and the pictures' rows.
+constexpr double kResultBytesPerPixel = 11 * 4 + 160 + 4 * 6;
+
+// The rows of a band: the masked pixels of rows [y0, y1) of the working mask.
+Mask BandMask(const Mask& mask, int y0, int y1) {
+  Mask band(mask.width, y1 - y0, false);
+  std::copy(mask.inside.begin() + static_cast<std::ptrdiff_t>(y0) * mask.width,
+            mask.inside.begin() + static_cast<std::ptrdiff_t>(y1) * mask.width,
+            band.inside.begin());
+  return band;
+}
+
+}  // namespace
+
+int NormalsMemory::BandRows(double limit, int height) const {
+  const double room = limit - fixed_bytes;
+  if (!(room >= per_row_bytes)) return 0;
+  return static_cast<int>(std::min<double>(height, std::floor(room / per_row_bytes)));
+}
+
+NormalsMemory EstimateNormalsMemory(const io::CaptureBands& capture,
+                                    const solve::NormalOptions& options, int threads) {
+  const io::Dataset& d = capture.dataset();
+  const double k = static_cast<double>(d.filenames.size());
+  const double masked = static_cast<double>(d.mask.count());
+  const double pixels = static_cast<double>(capture.width()) * capture.height();
+  NormalsMemory m;
+  // In memory (io::LoadObservations): the observations, a decoded image and the decoder's buffer
+  // per thread, the results, the pictures, and the ground truth as MATLAB doubles.
+  const double decoding = std::min<double>(ResolveThreads(threads), k) * 2.0 * d.file_width *
+                          d.file_height * 4 * sizeof(float);
+  m.whole_bytes = kProcessBytes + k * masked * 3 * sizeof(float) + decoding +
+                  pixels * (kResultBytesPerPixel + 1) +
+                  (d.files.ground_truth_path.empty() ? 0.0 : pixels * 3 * 8 * 2);
+  // In bands: the plan sample's observations stay for the whole run.
+  const double sample = std::min<double>(masked, static_cast<double>(options.plan_sample));
+  m.fixed_bytes = kProcessBytes + capture.FixedBytes() + sample * (k * 3 * sizeof(float) + 64);
+  m.per_row_bytes = capture.BytesPerRow() + capture.width() * kResultBytesPerPixel;
+  return m;
+}
+
+void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
+                       io::CaptureBands& capture, int band_rows, const NormalsMemory& memory,
+                       double started_seconds_ago) {
+  const auto start = Clock::now();
+  const io::Dataset& dataset = capture.dataset();
+  const int k = static_cast<int>(dataset.filenames.size());
+  const std::string too_big =
+      o.dataset + ": in bands of rows (" + SizeText(capture.width(), capture.height()) + " x " +
+      std::to_string(k) + " images would need " + FormatBytes(memory.whole_bytes) + " whole)";
+  // Over the memory limit that is exit 3; with --band-rows asked for, the request is wrong.
+  const auto refuse = [&](const std::string& why) {
+    if (o.band_rows > 0) throw std::runtime_error(too_big + ": " + why);
+    throw ResourceError(too_big + ": " + why);
+  };
+  if (k < 3) refuse("one or two images are solved whole, not in bands");
+  if (o.estimate_intensities) refuse("--estimate-intensities needs the whole capture at once");
+  if (o.integrate) {
+    refuse(
+        "--integrate needs the whole normal map: leave it out and run `iphong integrate` on "
+        "normals.exr");
+  }
+  Say(o.common, "Read %s: %s\n", o.dataset.c_str(), io::DescribeDataset(dataset).c_str());
+  for (const std::string& warning : dataset.warnings) Warn(warning);
+  Say(o.common,
+      "In bands of %d rows: the whole capture would need %s (memory limit %s); each band needs "
+      "about %s\n",
+      band_rows, FormatBytes(memory.whole_bytes).c_str(),
+      FormatBytes(static_cast<double>(o.common.memory().resolved())).c_str(),
+      FormatBytes(memory.fixed_bytes + band_rows * memory.per_row_bytes).c_str());
+
+  solve::NormalOptions options = NormalOptionsFor(o, dataset);
+  const int width = capture.width(), height = capture.height();
+  solve::BandSource source;
+  source.width = width;
+  source.height = height;
+  source.masked_pixels = dataset.mask.count();
+  source.read = [&](int y0, int y1, bool first_pass) {
+    return capture.ReadBand(y0, y1, first_pass);
+  };
+
+  // The writers open on the first band, when the plan says which maps there are.
+  std::unique_ptr<io::ImageRowWriter> normals, picture, albedo, residual, specular, model;
+  std::vector<float> sample_albedo;  // every 64th solved pixel's brightest channel
+  std::size_t specular_pixels = 0, chosen_pixels = 0;
+  const bool directx = o.convention == "directx";
+  auto progress = std::make_shared<Progress>("sample", o.common.talk(), "rows", height);
+  std::shared_ptr<Progress> fit;
+  solve::BandProgress band_progress;
+  band_progress.rows = [&](int pass, int rows) {
+    if (pass == 2 && !fit) {
+      progress.reset();
+      fit = std::make_shared<Progress>("fit", o.common.talk(), "rows", height);
+    }
+    (pass == 1 ? progress : fit)->Count(rows);
+  };
+  const auto write = [&](int y0, const solve::NormalResult& band) {
+    const int rows = band.normals.height;
+    if (!normals) {
+      normals = std::make_unique<io::ImageRowWriter>(out.file("normals.exr"), width, height, 3);
+      picture = std::make_unique<io::ImageRowWriter>(out.file("normals.png"), width, height, 3,
+                                                     io::WriteOptions{16, io::Encoding::kLinear});
+      albedo = std::make_unique<io::ImageRowWriter>(out.file("albedo.exr"), width, height, 3);
+      residual = std::make_unique<io::ImageRowWriter>(out.file("residual.exr"), width, height, 1);
+      if (!options.material_known && !band.specular.pixels.empty()) {
+        specular = std::make_unique<io::ImageRowWriter>(out.file("specular.exr"), width, height, 3);
+      }
+      if (!band.model_map.pixels.empty()) {
+        model = std::make_unique<io::ImageRowWriter>(out.file("model.exr"), width, height, 1);
+      }
+    }
+    const Mask mask = BandMask(dataset.mask, y0, y0 + rows);
+    normals->WriteRows(band.normals);
+    picture->WriteRows(io::NormalMapPicture(band.normals, mask, directx));
+    albedo->WriteRows(band.albedo);
+    residual->WriteRows(band.residual);
+    if (specular) specular->WriteRows(band.specular);
+    if (model) {
+      model->WriteRows(band.model_map);
+      for (float v : band.model_map.pixels) {
+        specular_pixels += v == 1;
+        chosen_pixels += v >= 0;
+      }
+    }
+    for (std::size_t p = 0; p < band.residual.pixels.size(); p += 64) {
+      if (band.residual.pixels[p] < 0 || !mask.inside[p]) continue;
+      const float* a = band.albedo.pixels.data() + 3 * p;
+      sample_albedo.push_back(std::max({a[0], a[1], a[2]}));
+    }
+  };
+  solve::NormalResult result;
+  try {
+    result = solve::EstimateNormalsInBands(source, band_rows, options, write, band_progress);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(o.dataset + ": " + e.what());
+  }
+  fit.reset();
+  progress.reset();
+  for (auto* w : {&normals, &picture, &albedo, &residual, &specular, &model})
+    if (*w) (*w)->Finish();
+
+  // albedo.png from the albedo just written, scaled as WriteAlbedoPicture scales (its 99th
+  // percentile to 0.8), the percentile taken over every 64th pixel.
+  {
+    ImageF brightest(static_cast<int>(sample_albedo.size()), 1, 1);
+    brightest.pixels = sample_albedo;
+    const float scale = sample_albedo.empty() ? 1.0f : render::AlbedoDisplayScale(brightest);
+    io::ImageRowReader reader(out.file("albedo.exr"));
+    io::ImageRowWriter pictures(out.file("albedo.png"), width, height, 3);
+    for (int y0 = 0; y0 < height; y0 += band_rows) {
+      const int y1 = std::min(height, y0 + band_rows);
+      ImageF rows = reader.ReadRows(y0, y1);
+      const Mask mask = BandMask(dataset.mask, y0, y1);
+      for (std::size_t p = 0; p < mask.inside.size(); ++p)
+        for (int c = 0; c < 3; ++c) rows.pixels[3 * p + c] *= mask.inside[p] ? scale : 0.0f;
+      pictures.WriteRows(rows);
+    }
+    pictures.Finish();
+  }
+
+  nlohmann::json metrics;
+  metrics["dataset"] = o.dataset;
+  metrics["input"] = NormalsInputJson(dataset);
+  metrics["pixels"] = result.summary.pixels;
+  metrics["images"] = k;
+  metrics["model"] = reflectance::LobeName(result.model);
+  metrics["bands"] = {
+      {"rows", band_rows},
+      {"count", (height + band_rows - 1) / band_rows},
+      {"memory_limit_bytes", o.common.memory().resolved()},
+      {"estimated_whole_bytes", memory.whole_bytes},
+      {"estimated_band_bytes", memory.fixed_bytes + band_rows * memory.per_row_bytes}};
+  metrics["sample_seconds"] = result.summary.init_seconds;
+  metrics["model_seconds"] = result.summary.model_seconds;
+  metrics["solve_seconds"] = result.summary.solve_seconds;
+  metrics["iterations"] = result.summary.iterations;
+  if (!result.model_choice.scored.empty()) {
+    metrics["model_choice"] = {{"chosen", reflectance::LobeName(result.model)},
+                               {"pixels_choosing_it", specular_pixels},
+                               {"pixels_choosing_lambert", chosen_pixels - specular_pixels},
+                               {"shininess", result.shininess},
+                               {"pixels", result.model_choice.pixels}};
+  }
+  metrics["dark_pixels"] = result.summary.dark_pixels;
+  metrics["underdetermined_pixels"] = result.summary.underdetermined_pixels;
+  metrics["material"] = options.material_known                         ? "known (material.json)"
+                        : options.model == reflectance::Lobe::kLambert ? "lambertian"
+                        : result.material_estimated                    ? "estimated"
+                                                                       : "lambertian (chosen)";
+  if (!result.specular_note.empty()) metrics["specular_note"] = result.specular_note;
+  if (!dataset.files.ground_truth_path.empty()) {
+    metrics["ground_truth_note"] =
+        "not compared in bands: the ground truth is read whole (iphong eval normals.exr DATASET)";
+  }
+  if (result.material_estimated) {
+    nlohmann::json material = {
+        {"model", reflectance::LobeName(result.model)},
+        {"ks", {result.ks[0], result.ks[1], result.ks[2]}},
+        {"shininess", result.shininess},
+        {"ambient", {1, 1, 1}},
+        {"ka", {result.ambient_term[0], result.ambient_term[1], result.ambient_term[2]}},
+        {"comment", "estimated by iphong normals: " + result.specular_note}};
+    io::WriteTextFile(out.file("material.json"), material.dump(2) + "\n");
+  }
+  metrics["total_seconds"] = started_seconds_ago + SecondsSince(start);
+  io::WriteTextFile(out.file("metrics.json"), metrics.dump(2) + "\n");
+  out.Commit();
+  PrintJson(o.common, metrics.dump(2));
+  if (std::string counts = io::DescribeImageCounts(dataset); !counts.empty()) Warn(counts);
+  Say(o.common,
+      "%zu pixels x %d images in %d bands of %d rows, model %s: plan sample %.2f s, model "
+      "choice %.2f s, search and fit %.2f s\n",
+      result.summary.pixels, k, (height + band_rows - 1) / band_rows, band_rows,
+      reflectance::LobeName(result.model).c_str(), result.summary.init_seconds,
+      result.summary.model_seconds, result.summary.solve_seconds);
+  if (result.material_estimated) {
+    Say(o.common, "Model %s, shininess %.1f; ks median [%.3f %.3f %.3f]\n",
+        reflectance::LobeName(result.model).c_str(), result.shininess, result.ks[0], result.ks[1],
+        result.ks[2]);
+  }
+  if (result.summary.dark_pixels + result.summary.underdetermined_pixels > 0) {
+    Say(o.common,
+        "%zu pixels dark in every image and %zu with fewer than 3 usable lights: "
+        "flagged -1 in residual.exr\n",
+        result.summary.dark_pixels, result.summary.underdetermined_pixels);
+  }
+  Say(o.common, "Wrote %s: normals.exr/.png, albedo.exr/.png, residual.exr, metrics.json%s%s%s\n",
+      o.output_dir.c_str(), result.material_estimated ? ", material.json" : "",
+      specular ? ", specular.exr" : "", model ? ", model.exr" : "");
+}
+
+}  // namespace iphong::cli

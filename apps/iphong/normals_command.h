@@ -1,0 +1,57 @@
+// `iphong normals`: the options, and the run in bands of rows for captures larger than the
+// memory limit (normals_bands.cc); the in-memory run is in cmd_normals.cc.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "io/capture_bands.h"
+#include "io/output_folder.h"
+#include "iphong/commands.h"
+#include "solve/normals.h"
+
+namespace iphong::cli {
+
+struct NormalsCommandOptions {
+  std::string dataset;
+  std::string output_dir;
+  std::optional<std::string> model;
+  bool ignore_material = false;
+  double discard_dark = 0.3, discard_bright = 0.1;
+  std::string convention = "opengl";
+  double shadow_threshold = solve::NormalOptions{}.shadow_threshold;
+  int irls_rounds = solve::NormalOptions{}.irls_rounds;
+  bool fast = false;
+  bool integrate = false;
+  bool estimate_intensities = false;
+  int band_rows = 0;  // > 0: in bands of this many rows whatever the memory limit
+  CaptureFlags capture;
+  CommonOptions common;
+};
+
+// What the run needs in memory at once: the whole capture's masked observations and full-size
+// results, or per row of a band.
+struct NormalsMemory {
+  double whole_bytes = 0;
+  double fixed_bytes = 0;    // in bands: the mask, the plan sample, the libraries
+  double per_row_bytes = 0;  // in bands: per row of the working size
+  // The rows a band may have within `limit` bytes; 0 when not even one fits.
+  int BandRows(double limit, int height) const;
+};
+NormalsMemory EstimateNormalsMemory(const io::CaptureBands& capture,
+                                    const solve::NormalOptions& options, int threads);
+
+nlohmann::json NormalsInputJson(const io::Dataset& d);
+
+// The solver's options from the command's flags and the capture's material.json.
+solve::NormalOptions NormalOptionsFor(const NormalsCommandOptions& o, const io::Dataset& d);
+
+// Normals in bands of `band_rows` rows (solve/bands.h), each band's results written as it is
+// done: normals.exr/.png, albedo.exr, residual.exr, specular.exr, model.exr; then albedo.png from
+// the written albedo.exr, material.json and metrics.json. Commits `out`.
+void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
+                       io::CaptureBands& capture, int band_rows, const NormalsMemory& memory,
+                       double started_seconds_ago);
+
+}  // namespace iphong::cli

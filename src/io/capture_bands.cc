@@ -1,0 +1,115 @@
+#include "io/capture_bands.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "core/image_ops.h"
+#include "core/parallel.h"
+#include "io/dataset_internal.h"
+
+namespace iphong::io {
+
+struct CaptureBands::State {
+  internal::Prepared p;
+  DatasetLoadOptions options;
+  std::vector<std::unique_ptr<ImageRowReader>> readers;
+  int channels = 3;  // the most any file has
+};
+
+CaptureBands::CaptureBands(const std::string& directory, const DatasetLoadOptions& options)
+    : state_(std::make_unique<State>()) {
+  State& s = *state_;
+  s.options = options;
+  s.options.load_images = false;
+  s.options.load_ground_truth = false;
+  s.p = internal::Prepare(directory, s.options);
+  const Dataset& d = s.p.d;
+  // Every file's header now: a missing or wrong-sized image fails before any band is read.
+  const std::string reference = d.filenames[0];
+  for (const std::string& path : d.files.paths) {
+    auto reader = std::make_unique<ImageRowReader>(path);
+    const ImageHeader& h = reader->header();
+    if (h.width != d.file_width || h.height != d.file_height) {
+      throw std::runtime_error(path + ": is " + SizeText(h.width, h.height) + ", but " + reference +
+                               " is " + SizeText(d.file_width, d.file_height));
+    }
+    s.channels = std::max(s.channels, h.channels);
+    s.readers.push_back(std::move(reader));
+  }
+}
+
+CaptureBands::~CaptureBands() = default;
+
+const Dataset& CaptureBands::dataset() const { return state_->p.d; }
+int CaptureBands::width() const { return state_->p.d.mask.width; }
+int CaptureBands::height() const { return state_->p.d.mask.height; }
+
+double CaptureBands::BytesPerRow() const {
+  const State& s = *state_;
+  const Dataset& d = s.p.d;
+  const double k = static_cast<double>(d.filenames.size());
+  const int scale = s.options.capture.downscale;
+  const double threads = std::min<double>(ResolveThreads(s.options.threads), k);
+  // The observations (K × 3 floats a pixel), and per decoding thread the file rows behind one
+  // working row: decoded, as RGB and cropped (three copies at most), then downscaled.
+  return sizeof(float) * (k * 3 * width() + threads * scale * d.file_width * (s.channels + 6.0));
+}
+
+double CaptureBands::FixedBytes() const {
+  const Dataset& d = state_->p.d;
+  // The working mask and the cropped file mask, one byte a pixel, and each decoder's state.
+  return static_cast<double>(d.mask.inside.size() + state_->p.file_mask.inside.size()) +
+         d.filenames.size() * 128.0 * 1024;
+}
+
+solve::PhotometricData CaptureBands::ReadBand(int y0, int y1, bool count) {
+  State& s = *state_;
+  Dataset& d = s.p.d;
+  const int w = width(), scale = s.options.capture.downscale;
+  if (y0 < 0 || y1 > height() || y1 <= y0) throw std::logic_error("band outside the capture");
+  Mask band_mask(w, y1 - y0, false);
+  std::copy(d.mask.inside.begin() + static_cast<std::ptrdiff_t>(y0) * w,
+            d.mask.inside.begin() + static_cast<std::ptrdiff_t>(y1) * w, band_mask.inside.begin());
+  solve::PhotometricData data =
+      solve::ObservationLayout(w, y1 - y0, band_mask, d.light_directions, d.light_intensities);
+  // Rows of the cropped file image behind the band (the crop's rows start at crop.y).
+  const PixelRect& crop = s.p.crop;
+  const int file_y0 = y0 * scale, file_rows = (y1 - y0) * scale;
+  const int offset_y = crop.width > 0 ? crop.y : 0;
+  const std::size_t k = s.readers.size();
+  std::vector<std::string> errors(k);
+  ParallelFor(0, k, 1, s.options.threads, [&](std::size_t b, std::size_t e) {
+    for (std::size_t j = b; j < e; ++j) {
+      try {
+        ImageF rows = internal::ToRgb(
+            s.readers[j]->ReadRows(offset_y + file_y0, offset_y + file_y0 + file_rows));
+        if (crop.width > 0) rows = CropImage(rows, {crop.x, 0, crop.width, file_rows});
+        if (count) {
+          // As ReadWorkingImage: counted on the stored code values, inside the file mask.
+          ImageCounts& counts = d.image_counts[j];
+          for (std::size_t q = 0; q < rows.pixel_count(); ++q) {
+            if (!s.p.file_mask.inside[static_cast<std::size_t>(file_y0) * rows.width + q]) continue;
+            const float* v = rows.pixels.data() + 3 * q;
+            if (v[0] == 0 && v[1] == 0 && v[2] == 0) ++counts.black;
+            if (s.p.integer_files && (v[0] >= 1 || v[1] >= 1 || v[2] >= 1)) ++counts.saturated;
+          }
+          counts.pixels = s.p.counted_pixels;
+        }
+        if (s.p.srgb) LinearizeSrgb(rows);
+        const ImageF band = DownscaleImage(rows, scale);
+        if (auto m = solve::GatherImage(data, static_cast<int>(j), band.pixels.data());
+            !m.empty()) {
+          errors[j] = d.files.paths[j] + ": rows " + std::to_string(offset_y + file_y0) + ".." +
+                      std::to_string(offset_y + file_y0 + file_rows - 1) + " " + m;
+        }
+      } catch (const std::exception& ex) {
+        errors[j] = ex.what();
+      }
+    }
+  });
+  for (const std::string& error : errors)
+    if (!error.empty()) throw std::runtime_error(error);
+  return data;
+}
+
+}  // namespace iphong::io

@@ -1,0 +1,60 @@
+// Images read and written a band of rows at a time, for captures and results larger than
+// memory. Rows are 0 at the top, as everywhere (SPEC.md).
+#pragma once
+
+#include <OpenImageIO/imageio.h>
+
+#include <memory>
+#include <string>
+
+#include "core/types.h"
+#include "io/image_io.h"
+
+namespace iphong::io {
+
+// Decodes rows of one image file; formats that only decode forward (PNG, JPEG) are reopened by
+// OpenImageIO when a pass starts again at the top.
+class ImageRowReader {
+ public:
+  // Throws std::runtime_error naming the file when it is not an image.
+  explicit ImageRowReader(const std::string& path);
+  const ImageHeader& header() const { return header_; }
+  // Rows [y0, y1) as float values, header().channels per pixel (integer formats scaled to 0..1,
+  // as ReadImage). Throws std::runtime_error "PATH: cannot decode rows Y0..Y1-1: why".
+  ImageF ReadRows(int y0, int y1);
+
+ private:
+  std::string path_;
+  ImageHeader header_;
+  std::unique_ptr<OIIO::ImageInput> in_;
+};
+
+// Writes an image band by band, top to bottom, straight to `path` (a new file in an output
+// folder's staging area): every byte goes through checked writes and the file is synced and
+// reread at Finish, so a full disk is an OutputError, never a short file that looks complete.
+// Values are stored as WriteImage stores them (integer formats clamped or sRGB-encoded).
+class ImageRowWriter {
+ public:
+  ImageRowWriter(const std::string& path, int width, int height, int channels,
+                 const WriteOptions& options = {});
+  ~ImageRowWriter();  // an unfinished file is removed
+  ImageRowWriter(const ImageRowWriter&) = delete;
+  ImageRowWriter& operator=(const ImageRowWriter&) = delete;
+  // The next rows: band.width and band.channels as opened, rows continuing the last call's.
+  void WriteRows(const ImageF& band);
+  int rows_written() const { return next_row_; }
+  void Finish();  // all rows written; throws OutputError when the file is not what was written
+
+ private:
+  class Proxy;
+  std::string path_;
+  int width_, height_, channels_;
+  WriteOptions options_;
+  bool is_float_ = false;
+  int next_row_ = 0;
+  bool finished_ = false;
+  std::unique_ptr<Proxy> proxy_;
+  std::unique_ptr<OIIO::ImageOutput> out_;
+};
+
+}  // namespace iphong::io

@@ -1,0 +1,93 @@
+"""`iphong normals` in bands of rows (--band-rows, or whenever the capture does not fit in
+--memory-limit): the same maps as the in-memory run, value for value; a memory limit too small
+for one row, a file that fails to decode half way and options that need the whole capture are
+one line each, and nothing is written."""
+import json
+import pathlib
+import shutil
+import subprocess
+
+import pytest
+
+from cli import IPHONG, assert_refused, binary_available, render_dataset, run
+
+pytestmark = pytest.mark.skipif(not binary_available(), reason=f"no iphong binary at {IPHONG}")
+OIIOTOOL = shutil.which("oiiotool")
+
+
+def identical(a, b):
+    """oiiotool's verdict on two images with no tolerance at all."""
+    done = subprocess.run([OIIOTOOL, "--fail", "0", "--warn", "0", str(a), str(b), "--diff"],
+                          capture_output=True, text=True)
+    return done.returncode == 0
+
+
+@pytest.fixture(scope="module")
+def captures(tmp_path_factory):
+    root = tmp_path_factory.mktemp("bands")
+    render_dataset(root / "exr")
+    render_dataset(root / "png", "--format", "png", "--bits", "16")
+    return root
+
+
+@pytest.mark.skipif(OIIOTOOL is None, reason="oiiotool (openimageio-tools) not installed")
+@pytest.mark.parametrize("layout,rows,flags", [
+    ("exr", 5, ["--ignore-material"]),    # model chosen, ks per pixel, model.exr
+    ("png", 13, []),                      # known material.json
+    ("png", 7, ["--model", "lambert"]),   # Woodham
+    ("exr", 4, ["--ignore-material", "--crop", "8,4,80,90", "--downscale", "2"]),
+])
+def test_bands_equal_the_whole(captures, tmp_path, layout, rows, flags):
+    data = captures / layout
+    code, _, err = run("normals", data, "-o", tmp_path / "whole", "-q", *flags)
+    assert code == 0, err
+    code, out, err = run("normals", data, "-o", tmp_path / "bands", "--band-rows", rows,
+                         "--json", *flags)
+    assert code == 0, err
+    metrics = json.loads(out)
+    assert metrics["bands"]["rows"] == rows
+    whole = json.loads((tmp_path / "whole" / "metrics.json").read_text())
+    assert metrics["model"] == whole["model"]
+    assert metrics["pixels"] == whole["pixels"]
+    maps = ["normals.exr", "normals.png", "albedo.exr", "residual.exr"]
+    maps += [m for m in ("specular.exr", "model.exr") if (tmp_path / "whole" / m).exists()]
+    for name in maps:
+        assert (tmp_path / "bands" / name).exists(), name
+        assert identical(tmp_path / "whole" / name, tmp_path / "bands" / name), name
+    if (tmp_path / "whole" / "material.json").exists():
+        a = json.loads((tmp_path / "whole" / "material.json").read_text())
+        b = json.loads((tmp_path / "bands" / "material.json").read_text())
+        assert a["ks"] == b["ks"] and a["shininess"] == b["shininess"]
+
+
+def test_memory_limit_chooses_bands(captures, tmp_path):
+    """A limit between one row's need and the whole capture's: bands, within the limit."""
+    code, out, err = run("normals", captures / "png", "-o", tmp_path / "one", "--json",
+                         "--band-rows", "1")
+    assert code == 0, err
+    one = json.loads(out)["bands"]
+    limit = (one["estimated_band_bytes"] + one["estimated_whole_bytes"]) / 2
+    code, out, err = run("normals", captures / "png", "-o", tmp_path / "out", "--json",
+                         "--memory-limit", f"{limit / 1e9:.6f}")
+    assert code == 0, err
+    bands = json.loads(out)["bands"]
+    assert 1 < bands["count"] < 96
+    assert bands["estimated_band_bytes"] <= limit < bands["estimated_whole_bytes"]
+
+
+def test_refusals_write_nothing(captures, tmp_path):
+    shutil.copytree(captures / "png", tmp_path / "ds")
+    (tmp_path / "ds" / ".iphong-manifest.json").unlink()
+    out = tmp_path / "out"
+    # Less than one row needs: exit 3 with the figure.
+    assert_refused(tmp_path, ["normals", tmp_path / "ds", "-o", out, "--memory-limit", "0.19"], 3,
+                   r"one row of 96x1 x 12 images needs .* more than the memory limit")
+    # Options that need the whole capture.
+    for flag in ("--integrate", "--estimate-intensities"):
+        assert_refused(tmp_path, ["normals", tmp_path / "ds", "-o", out, "--band-rows", "8", flag],
+                       1, r"in bands of rows .*" + flag)
+    # An image cut off half way: found only when its rows are decoded, named with the rows.
+    image = tmp_path / "ds" / "007.png"
+    image.write_bytes(image.read_bytes()[: image.stat().st_size * 2 // 3])
+    assert_refused(tmp_path, ["normals", tmp_path / "ds", "-o", out, "--band-rows", "8"], 1,
+                   r"007\.png: cannot decode rows \d+\.\.\d+", names=image)
