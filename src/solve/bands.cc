@@ -19,11 +19,13 @@ NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
       PlanSampleIndices(source.masked_pixels, options.plan_sample);
 
   // Pass 1: the plan sample's observations, in the masked-pixel order EstimateNormals uses.
+  // Woodham and known coefficients decide nothing for the whole object: no first pass.
+  const bool planned = options.model != reflectance::Lobe::kLambert && !options.material_known;
   const auto start = Clock::now();
   PhotometricData sampled;
   std::size_t position = 0;  // masked pixels before this band
   auto next = sample.begin();
-  for (int y0 = 0; y0 < source.height; y0 += band_rows) {
+  for (int y0 = 0; planned && y0 < source.height; y0 += band_rows) {
     const int y1 = std::min(source.height, y0 + band_rows);
     const PhotometricData band = source.read(y0, y1, true);
     if (y0 == 0) {
@@ -42,13 +44,17 @@ NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
     position += band.pixel_count();
     if (progress.rows) progress.rows(1, y1);
   }
-  if (position != source.masked_pixels) {
-    throw std::invalid_argument("the bands hold " + std::to_string(position) +
-                                " masked pixels, the source said " +
-                                std::to_string(source.masked_pixels));
-  }
+  const auto check_count = [&] {
+    if (position != source.masked_pixels) {
+      throw std::invalid_argument("the bands hold " + std::to_string(position) +
+                                  " masked pixels, the source said " +
+                                  std::to_string(source.masked_pixels));
+    }
+  };
+  if (planned) check_count();
   const double sample_seconds = SecondsSince(start);
-  const NormalPlan plan = PlanNormals(sampled, options);
+  NormalPlan plan;
+  if (planned) plan = PlanNormals(sampled, options);
   sampled = PhotometricData();  // freed before the fit
 
   // Pass 2: every band with the plan; the sample pixels' ks for the object's median.
@@ -60,7 +66,8 @@ NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
   next = sample.begin();
   for (int y0 = 0; y0 < source.height; y0 += band_rows) {
     const int y1 = std::min(source.height, y0 + band_rows);
-    const PhotometricData band = source.read(y0, y1, false);
+    const PhotometricData band = source.read(y0, y1, !planned);
+    if (!planned && y0 == 0) plan = PlanNormals(SubsetObservations(band, {}), options);
     NormalResult r = SolveNormalsWithPlan(band, plan);
     for (; next != sample.end() && *next < position + band.pixel_count(); ++next) {
       const std::size_t p = static_cast<std::size_t>(band.pixels[*next - position]);
@@ -84,6 +91,7 @@ NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
     write(y0, r);
     if (progress.rows) progress.rows(2, y1);
   }
+  if (!planned) check_count();
   FinishNormals(total, plan, sample_ks);
   NormalSummary& s = total.summary;
   s.success = true;

@@ -18,7 +18,9 @@ struct BandSource {
   int width = 0;
   int height = 0;
   std::size_t masked_pixels = 0;  // over the whole image: the plan sample is drawn from them
-  // Observations of rows [y0, y1). Called once per band in each of two passes, top to bottom.
+  // Observations of rows [y0, y1), top to bottom: in two passes when the model is to be chosen
+  // (the first draws the plan sample), in one for Woodham or known coefficients. `first_pass`
+  // is true on the first pass over the capture, whichever it is.
   std::function<PhotometricData(int y0, int y1, bool first_pass)> read;
 };
 

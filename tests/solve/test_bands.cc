@@ -121,6 +121,38 @@ INSTANTIATE_TEST_SUITE_P(Heights, Bands,
                                            std::pair{18, std::size_t{300}},
                                            std::pair{40, std::size_t{300}}));
 
+// Woodham and known coefficients decide nothing for the whole object: one pass, same maps.
+TEST(Bands, WoodhamAndKnownCoefficientsReadOnce) {
+  const Capture c = MakeCapture();
+  NormalOptions lambert;
+  lambert.model = reflectance::Lobe::kLambert;
+  NormalOptions known;
+  known.material_known = true;
+  known.ks = Vec3d::Constant(0.3);
+  known.shininess = 30;
+  known.ambient_term = Vec3d::Constant(0.025);
+  for (const NormalOptions& options : {lambert, known}) {
+    const NormalResult whole = EstimateNormals(Band(c, 0, c.size), options);
+    BandSource source;
+    source.width = c.size;
+    source.height = c.size;
+    source.masked_pixels = c.out.mask.count();
+    int reads = 0;
+    source.read = [&](int y0, int y1, bool first_pass) {
+      EXPECT_TRUE(first_pass);
+      ++reads;
+      return Band(c, y0, y1);
+    };
+    const NormalResult banded =
+        EstimateNormalsInBands(source, 9, options, [&](int y0, const NormalResult& band) {
+          ExpectRowsEqual(whole.normals, y0, band.normals, "normals");
+          ExpectRowsEqual(whole.albedo, y0, band.albedo, "albedo");
+        });
+    EXPECT_EQ(reads, (c.size + 8) / 9);
+    EXPECT_EQ(banded.ks, whole.ks);
+  }
+}
+
 TEST(Bands, PlanSampleIsEvenAndComplete) {
   const std::vector<std::size_t> all = PlanSampleIndices(10, 131072);
   ASSERT_EQ(all.size(), 10u);
