@@ -3,6 +3,8 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
+#include <cstdint>
 #include <cstring>
 
 #include "arrays.h"
@@ -13,7 +15,274 @@
 namespace py = pybind11;
 
 namespace iphong::python {
+namespace {
+
+// estimate_normals' keyword arguments as the solver's options (the same for every entry point).
+solve::NormalOptions OptionsFrom(const py::object& model, const py::object& material,
+                                 double discard_dark, double discard_bright, bool fast,
+                                 double shadow_threshold, int threads) {
+  solve::NormalOptions options;
+  const bool model_given = !model.is_none();
+  if (model_given) {
+    options.model = reflectance::ParseLobe(ToText(model, "model"));
+    options.choose_model = false;
+  }
+  options.discard_dark = discard_dark;
+  options.discard_bright = discard_bright;
+  options.threads = threads;
+  options.color_residuals = !fast;
+  options.shadow_threshold = shadow_threshold;
+  if (!material.is_none()) {
+    if (!py::isinstance<py::dict>(material)) {
+      throw py::type_error(
+          "material: expected a dict with ka, kd, ks, shininess, ambient, "
+          "model; got " +
+          TypeName(material));
+    }
+    const py::dict d = material.cast<py::dict>();
+    for (const auto& item : d) {
+      const std::string key = py::str(item.first);
+      if (key != "ka" && key != "kd" && key != "ks" && key != "shininess" && key != "ambient" &&
+          key != "model") {
+        throw std::invalid_argument("material: unknown key '" + key +
+                                    "' (ka, kd, ks, shininess, ambient, model)");
+      }
+    }
+    auto rgb = [&](const char* key, const Vec3d& fallback) -> Vec3d {
+      return d.contains(key) ? ToRgb(d[key], std::string("material['") + key + "']") : fallback;
+    };
+    reflectance::Material coefficients;
+    coefficients.ka = rgb("ka", Vec3d::Zero());
+    coefficients.kd = rgb("kd", Vec3d::Ones());
+    coefficients.ks = rgb("ks", Vec3d::Zero());
+    coefficients.shininess =
+        d.contains("shininess") ? ToNumber(d["shininess"], "material['shininess']") : 1.0;
+    if (auto m = reflectance::ValidateMaterial(coefficients); !m.empty()) {
+      throw std::invalid_argument(m);
+    }
+    const Vec3d ambient = rgb("ambient", Vec3d::Ones());
+    if ((ambient.array() < 0).any()) {
+      throw std::invalid_argument("material['ambient']: must be >= 0");
+    }
+    options.material_known = true;
+    options.ambient_term = ambient.cwiseProduct(coefficients.ka);
+    options.ks = coefficients.ks;
+    options.shininess = coefficients.shininess;
+    if (d.contains("model") && !model_given) {
+      options.model = reflectance::ParseLobe(ToText(d["model"], "material['model']"));
+    }
+    if (d.contains("kd")) options.known_albedo = coefficients.kd;
+  }
+  return options;
+}
+
+py::list ToList(const Vec3d& v) { return py::cast(std::vector<double>{v[0], v[1], v[2]}); }
+
+py::dict CandidateDict(const solve::ModelCandidate& c) {
+  return py::dict(
+      py::arg("model") = reflectance::LobeName(c.lobe), py::arg("shininess") = c.shininess,
+      py::arg("ks_prior_weight") = c.ks_prior_weight, py::arg("ks_prior") = ToList(c.ks_prior),
+      py::arg("ambient_term") = ToList(c.ambient_term), py::arg("heldout_cost") = c.heldout_cost,
+      py::arg("heldout_error") = c.heldout_error, py::arg("fold_angle_deg") = c.fold_angle_deg);
+}
+
+solve::ModelCandidate CandidateFrom(const py::dict& d) {
+  solve::ModelCandidate c;
+  c.lobe = reflectance::ParseLobe(d["model"].cast<std::string>());
+  c.shininess = d["shininess"].cast<double>();
+  c.ks_prior_weight = d["ks_prior_weight"].cast<double>();
+  c.ks_prior = ToRgb(d["ks_prior"], "plan ks_prior");
+  c.ambient_term = ToRgb(d["ambient_term"], "plan ambient_term");
+  c.heldout_cost = d["heldout_cost"].cast<double>();
+  c.heldout_error = d["heldout_error"].cast<double>();
+  c.fold_angle_deg = d["fold_angle_deg"].cast<double>();
+  return c;
+}
+
+// A plan as plain Python values (floats are doubles, so a plan sent to a Dask worker and back is
+// the same plan bit for bit).
+py::dict PlanDict(const solve::NormalPlan& plan) {
+  const solve::NormalOptions& o = plan.options;
+  py::dict options(
+      py::arg("model") = reflectance::LobeName(o.model), py::arg("choose_model") = o.choose_model,
+      py::arg("discard_dark") = o.discard_dark, py::arg("discard_bright") = o.discard_bright,
+      py::arg("saturation") = o.saturation, py::arg("shadow_threshold") = o.shadow_threshold,
+      py::arg("irls_rounds") = o.irls_rounds, py::arg("search_candidates") = o.search_candidates,
+      py::arg("model_sample") = o.model_sample, py::arg("plan_sample") = o.plan_sample,
+      py::arg("per_pixel_model") = o.per_pixel_model,
+      py::arg("color_residuals") = o.color_residuals, py::arg("max_iterations") = o.max_iterations,
+      py::arg("material_known") = o.material_known,
+      py::arg("ambient_term") = ToList(o.ambient_term), py::arg("ks") = ToList(o.ks),
+      py::arg("shininess") = o.shininess,
+      py::arg("known_albedo") = o.known_albedo ? py::object(ToList(*o.known_albedo)) : py::none());
+  py::list scored;
+  for (const solve::ModelCandidate& c : plan.model_choice.scored) scored.append(CandidateDict(c));
+  return py::dict(
+      py::arg("options") = options,
+      py::arg("requested_model") = reflectance::LobeName(plan.requested_model),
+      py::arg("chosen") = CandidateDict(plan.model_choice.chosen), py::arg("scored") = scored,
+      py::arg("fold") = plan.model_choice.fold, py::arg("pixels") = plan.model_choice.pixels,
+      py::arg("note") = plan.model_choice.note, py::arg("model_seconds") = plan.model_seconds);
+}
+
+solve::NormalPlan PlanFrom(const py::object& value) {
+  if (!py::isinstance<py::dict>(value)) {
+    throw py::type_error("plan: expected the dict plan_normals returns; got " + TypeName(value));
+  }
+  const py::dict d = value.cast<py::dict>();
+  solve::NormalPlan plan;
+  try {
+    const py::dict o = d["options"].cast<py::dict>();
+    solve::NormalOptions& n = plan.options;
+    n.model = reflectance::ParseLobe(o["model"].cast<std::string>());
+    n.choose_model = o["choose_model"].cast<bool>();
+    n.discard_dark = o["discard_dark"].cast<double>();
+    n.discard_bright = o["discard_bright"].cast<double>();
+    n.saturation = o["saturation"].cast<double>();
+    n.shadow_threshold = o["shadow_threshold"].cast<double>();
+    n.irls_rounds = o["irls_rounds"].cast<int>();
+    n.search_candidates = o["search_candidates"].cast<int>();
+    n.model_sample = o["model_sample"].cast<int>();
+    n.plan_sample = o["plan_sample"].cast<std::size_t>();
+    n.per_pixel_model = o["per_pixel_model"].cast<bool>();
+    n.color_residuals = o["color_residuals"].cast<bool>();
+    n.max_iterations = o["max_iterations"].cast<int>();
+    n.material_known = o["material_known"].cast<bool>();
+    n.ambient_term = ToRgb(o["ambient_term"], "plan ambient_term");
+    n.ks = ToRgb(o["ks"], "plan ks");
+    n.shininess = o["shininess"].cast<double>();
+    if (!o["known_albedo"].is_none()) n.known_albedo = ToRgb(o["known_albedo"], "plan kd");
+    plan.requested_model = reflectance::ParseLobe(d["requested_model"].cast<std::string>());
+    plan.model_choice.chosen = CandidateFrom(d["chosen"].cast<py::dict>());
+    for (const auto& c : d["scored"].cast<py::list>())
+      plan.model_choice.scored.push_back(CandidateFrom(c.cast<py::dict>()));
+    plan.model_choice.fold = d["fold"].cast<std::vector<int>>();
+    plan.model_choice.pixels = d["pixels"].cast<std::size_t>();
+    plan.model_choice.note = d["note"].cast<std::string>();
+    plan.model_seconds = d["model_seconds"].cast<double>();
+  } catch (const py::error_already_set& e) {
+    throw std::invalid_argument(std::string("plan: not a plan from plan_normals (") + e.what() +
+                                ")");
+  } catch (const py::cast_error& e) {
+    throw std::invalid_argument(std::string("plan: not a plan from plan_normals (") + e.what() +
+                                ")");
+  }
+  if (auto m = plan.options.Validate(); !m.empty()) throw std::invalid_argument("plan: " + m);
+  return plan;
+}
+
+}  // namespace
+
 void BindSolve(py::module_& m) {
+  m.def(
+      "plan_sample_indices",
+      [](std::size_t masked_pixels, std::size_t plan_sample) {
+        if (plan_sample < 1) throw std::invalid_argument("plan_sample must be >= 1");
+        return solve::PlanSampleIndices(masked_pixels, plan_sample);
+      },
+      py::arg("masked_pixels"), py::arg("plan_sample") = solve::NormalOptions{}.plan_sample,
+      "Positions, in the masked pixels' row-major order, of the pixels the whole-object "
+      "decisions of estimate_normals see: all of them up to plan_sample, else that many at an "
+      "even stride.");
+
+  m.def(
+      "plan_normals",
+      [](const py::object& observations_in, const py::object& positions_in, int width, int height,
+         const py::object& light_directions, const py::object& light_intensities,
+         const py::object& model, const py::object& material, double discard_dark,
+         double discard_bright, bool fast, double shadow_threshold, int threads) {
+        const FloatStack obs = FloatStack::ensure(observations_in);
+        if (!obs || obs.ndim() != 3 || obs.shape(2) != 3) {
+          throw std::invalid_argument("observations: expected (n, K, 3) float");
+        }
+        const auto positions =
+            py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(
+                positions_in);
+        const std::size_t n = obs.shape(0), k = obs.shape(1);
+        if (!positions || positions.ndim() != 1 ||
+            static_cast<std::size_t>(positions.shape(0)) != n) {
+          throw std::invalid_argument("positions: expected (n,) integers, one per observation row");
+        }
+        if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
+        solve::PhotometricData data;
+        data.width = width;
+        data.height = height;
+        data.images = static_cast<int>(k);
+        data.light_directions = ToDirections(light_directions, k);
+        data.light_intensities = light_intensities.is_none()
+                                     ? std::vector<Vec3d>(k, Vec3d::Ones())
+                                     : ToRows(light_intensities, k, "light_intensities");
+        const std::int64_t* p = positions.data();
+        for (std::size_t i = 0; i < n; ++i) {
+          if (p[i] < 0 || p[i] >= std::int64_t{width} * height || (i > 0 && p[i] <= p[i - 1])) {
+            throw std::invalid_argument("positions: must be ascending pixel indices in the image");
+          }
+          data.pixels.push_back(static_cast<int>(p[i]));
+        }
+        data.values.assign(obs.data(), obs.data() + n * k * 3);
+        for (float v : data.values)
+          if (!std::isfinite(v)) throw std::invalid_argument("observations: a non-finite value");
+        const solve::NormalOptions options = OptionsFrom(
+            model, material, discard_dark, discard_bright, fast, shadow_threshold, threads);
+        if (k < 3) throw std::invalid_argument("the plan needs at least 3 images");
+        solve::NormalPlan plan;
+        {
+          py::gil_scoped_release release;
+          plan = solve::PlanNormals(data, options);
+        }
+        return PlanDict(plan);
+      },
+      py::arg("observations"), py::arg("positions"), py::arg("width"), py::arg("height"),
+      py::arg("light_directions"), py::arg("light_intensities") = py::none(),
+      py::arg("model") = py::none(), py::arg("material") = py::none(),
+      py::arg("discard_dark") = 0.3, py::arg("discard_bright") = 0.1, py::arg("fast") = false,
+      py::arg("shadow_threshold") = solve::NormalOptions{}.shadow_threshold, py::arg("threads") = 0,
+      R"doc(The whole-object decisions of estimate_normals (the model, its shininess, the ambient
+term), from the plan sample: observations (n, K, 3) of the pixels at `positions` (ascending
+row-major indices in a width x height image; plan_sample_indices says which). Returns a plan, a
+dict of plain values for solve_normals_block. Arguments as estimate_normals.)doc");
+
+  m.def(
+      "solve_normals_block",
+      [](const py::object& images_in, const py::object& mask_in, const py::object& light_directions,
+         const py::object& light_intensities, const py::object& plan_in, int threads) {
+        solve::NormalPlan plan = PlanFrom(plan_in);
+        plan.options.threads = threads;
+        const FloatStack images = ToImageStack(images_in);
+        const std::size_t k = images.shape(0);
+        const std::vector<Vec3d> intensities =
+            light_intensities.is_none() ? std::vector<Vec3d>(k, Vec3d::Ones())
+                                        : ToRows(light_intensities, k, "light_intensities");
+        const solve::PhotometricData data =
+            ToObservations(images, ToDirections(light_directions, k), intensities, mask_in);
+        if (k < 3) throw std::invalid_argument("a block needs at least 3 images");
+        solve::NormalResult r;
+        {
+          py::gil_scoped_release release;
+          r = solve::SolveNormalsWithPlan(data, plan);
+        }
+        const std::size_t h = data.height, w = data.width;
+        py::array_t<float> out({h, w, std::size_t{11}});
+        float* o = out.mutable_data();
+        for (std::size_t p = 0; p < h * w; ++p) {
+          float* v = o + 11 * p;
+          for (int c = 0; c < 3; ++c) {
+            v[c] = r.normals.pixels[3 * p + c];
+            v[3 + c] = r.albedo.pixels[3 * p + c];
+            v[6 + c] = r.specular.pixels.empty() ? 0.0f : r.specular.pixels[3 * p + c];
+          }
+          v[9] = r.residual.pixels[p];
+          v[10] = r.model_map.pixels.empty() ? -1.0f : r.model_map.pixels[p];
+        }
+        return out;
+      },
+      py::arg("images"), py::arg("mask"), py::arg("light_directions"),
+      py::arg("light_intensities") = py::none(), py::arg("plan"), py::arg("threads") = 1,
+      R"doc(Every pixel of one block (images (K, h, w, 3), mask (h, w) or None) fitted with a plan
+from plan_normals: (h, w, 11) float32 = normals 0:3, albedo 3:6, specular 6:9 (0 without a lobe),
+residual 9 (-1: no normal), model map 10 (1 specular, 0 Lambert, -1 none). A pixel's values
+depend on its own observations and the plan only, so any blocking gives the same maps.)doc");
+
   m.def(
       "estimate_normals",
       [](const py::object& images_in, const py::object& light_directions,
@@ -27,59 +296,8 @@ void BindSolve(py::module_& m) {
                                         : ToRows(light_intensities, k, "light_intensities");
         const solve::PhotometricData data =
             ToObservations(images, ToDirections(light_directions, k), intensities, mask_in);
-        solve::NormalOptions options;
-        const bool model_given = !model.is_none();
-        if (model_given) {
-          options.model = reflectance::ParseLobe(ToText(model, "model"));
-          options.choose_model = false;
-        }
-        options.discard_dark = discard_dark;
-        options.discard_bright = discard_bright;
-        options.threads = threads;
-        options.color_residuals = !fast;
-        options.shadow_threshold = shadow_threshold;
-        if (!material.is_none()) {
-          if (!py::isinstance<py::dict>(material)) {
-            throw py::type_error(
-                "material: expected a dict with ka, kd, ks, shininess, ambient, "
-                "model; got " +
-                TypeName(material));
-          }
-          const py::dict d = material.cast<py::dict>();
-          for (const auto& item : d) {
-            const std::string key = py::str(item.first);
-            if (key != "ka" && key != "kd" && key != "ks" && key != "shininess" &&
-                key != "ambient" && key != "model") {
-              throw std::invalid_argument("material: unknown key '" + key +
-                                          "' (ka, kd, ks, shininess, ambient, model)");
-            }
-          }
-          auto rgb = [&](const char* key, const Vec3d& fallback) -> Vec3d {
-            return d.contains(key) ? ToRgb(d[key], std::string("material['") + key + "']")
-                                   : fallback;
-          };
-          reflectance::Material coefficients;
-          coefficients.ka = rgb("ka", Vec3d::Zero());
-          coefficients.kd = rgb("kd", Vec3d::Ones());
-          coefficients.ks = rgb("ks", Vec3d::Zero());
-          coefficients.shininess =
-              d.contains("shininess") ? ToNumber(d["shininess"], "material['shininess']") : 1.0;
-          if (auto m = reflectance::ValidateMaterial(coefficients); !m.empty()) {
-            throw std::invalid_argument(m);
-          }
-          const Vec3d ambient = rgb("ambient", Vec3d::Ones());
-          if ((ambient.array() < 0).any()) {
-            throw std::invalid_argument("material['ambient']: must be >= 0");
-          }
-          options.material_known = true;
-          options.ambient_term = ambient.cwiseProduct(coefficients.ka);
-          options.ks = coefficients.ks;
-          options.shininess = coefficients.shininess;
-          if (d.contains("model") && !model_given) {
-            options.model = reflectance::ParseLobe(ToText(d["model"], "material['model']"));
-          }
-          if (d.contains("kd")) options.known_albedo = coefficients.kd;
-        }
+        solve::NormalOptions options = OptionsFrom(model, material, discard_dark, discard_bright,
+                                                   fast, shadow_threshold, threads);
         if (k < 3 && !options.known_albedo) {
           throw std::invalid_argument(
               "with 1 or 2 images pass material={'kd': ..., ...}: the coefficients must be "

@@ -10,6 +10,8 @@ packages=(
   libcli11-dev nlohmann-json3-dev libopenmesh-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-pytest
+  # iphong.dask: normals on chunked arrays and many captures, locally or on a cluster.
+  python3-dask python3-distributed
   # The relighting viewer's test renders its WebGL page headless (SwiftShader, no GPU needed).
   chromium
 )

@@ -278,6 +278,10 @@ def load_dataset(directory, max_memory_gb=None, *, lights=None, intensities=None
 
 load_dataset.__doc__ = _core.load_dataset.__doc__
 
+plan_sample_indices = _core.plan_sample_indices
+plan_normals = _short_type_errors(_core.plan_normals)
+solve_normals_block = _short_type_errors(_core.solve_normals_block)
+
 #: Every named material preset, by name (seed 000's Phong table and seed 004's tutorial table).
 materials = {preset.name: preset.material for preset in material_presets()}
 
@@ -300,10 +304,13 @@ __all__ = [
     "material_presets",
     "materials",
     "normals_from_height",
+    "plan_normals",
+    "plan_sample_indices",
     "relight",
     "render",
     "save_dataset",
     "save_mesh",
     "save_normals",
     "shade",
+    "solve_normals_block",
 ]

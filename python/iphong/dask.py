@@ -1,0 +1,172 @@
+"""Normal recovery on Dask: captures larger than one machine's memory, and many captures.
+
+estimate_normals(images, light_directions, ...) takes a dask.array (K, H, W, 3) chunked over H and
+W and returns dask arrays. What the whole object decides (the model, its shininess, the ambient
+term) is decided once, eagerly, on the plan sample (iphong.plan_sample_indices: every masked pixel
+up to 2^17, else 2^17 at an even stride), gathered from the array with a pointwise index; then
+each block is fitted by the C++ solver (solve_normals_block) with that plan, which is all that is
+shipped to the workers beside the block. A pixel's result depends on its own observations and the
+plan only, so the maps are the same, value for value, for any chunking — and the same as
+iphong.estimate_normals on the whole array.
+
+process_datasets(paths, output_root, client=None) runs the `iphong normals` command on many
+capture folders as independent tasks (on a dask.distributed Client, or Dask's local threads):
+each writes its own output folder atomically, and a failure is reported in the summary without
+stopping the others.
+"""
+import os as _os
+import pathlib as _pathlib
+import shutil as _shutil
+import subprocess as _subprocess
+import time as _time
+
+import numpy as _np
+
+from . import _core
+
+_MAPS = {"normals": slice(0, 3), "albedo": slice(3, 6), "specular": slice(6, 9),
+         "residual": 9, "model_map": 10}
+
+
+def _solve_block(images, mask, light_directions, light_intensities, plan, threads):
+    return _core.solve_normals_block(images, mask, light_directions, light_intensities, plan,
+                                     threads)
+
+
+def estimate_normals(images, light_directions, light_intensities=None, mask=None, model=None,
+                     material=None, discard_dark=0.3, discard_bright=0.1, fast=False,
+                     shadow_threshold=0.1, plan_sample=131072, threads_per_block=1):
+    """iphong.estimate_normals on a dask.array (K, H, W, 3), chunked over H and W only.
+
+    mask: (H, W) bool (numpy or dask) or None (every pixel). Returns a dict: normals, albedo,
+    specular (H, W, 3), residual, model_map (H, W) as lazy dask arrays with the images' chunks;
+    model, shininess, ambient_term and the plan (decided now, on the plan sample); ks, a lazy
+    (3,) array: the median ks of the plan sample's solved pixels, as estimate_normals reports it.
+    Raises ValueError for inconsistent shapes or chunks over K or the colour axis.
+    """
+    import dask
+    import dask.array as da
+
+    images = images if isinstance(images, da.Array) else da.from_array(_np.asarray(images))
+    if images.ndim != 4 or images.shape[3] != 3:
+        raise ValueError(f"images: expected (K, H, W, 3), got shape {images.shape}")
+    k, h, w, _ = images.shape
+    if len(images.chunks[0]) != 1 or len(images.chunks[3]) != 1:
+        raise ValueError("images: chunk over H and W only (every block needs all K images and "
+                         "all 3 channels): use images.rechunk({0: -1, 3: -1})")
+    if images.dtype != _np.float32:
+        images = images.astype(_np.float32)
+    if mask is None:
+        mask_np = _np.ones((h, w), bool)
+    else:
+        mask_np = _np.asarray(mask.compute() if isinstance(mask, da.Array) else mask).astype(bool)
+    if mask_np.shape != (h, w):
+        raise ValueError(f"mask: expected ({h}, {w}), got {mask_np.shape}")
+    directions = _np.asarray(light_directions, dtype=_np.float64)
+    intensities = None if light_intensities is None else _np.asarray(light_intensities,
+                                                                     dtype=_np.float64)
+    if plan_sample < 1:
+        raise ValueError("plan_sample must be >= 1")
+    if material is not None:
+        from . import Material, _material_dict  # as iphong.estimate_normals takes it
+        if isinstance(material, Material) and not any(material.kd):
+            material = {key: v for key, v in _material_dict(material).items() if key != "kd"}
+        else:
+            material = _material_dict(material, extra=("ambient", "model"))
+
+    # The plan sample, gathered pointwise: only its pixels' observations are computed.
+    masked = _np.flatnonzero(mask_np)
+    positions = masked[_np.asarray(_core.plan_sample_indices(masked.size, plan_sample),
+                                   dtype=_np.int64)]
+    rows, cols = _np.divmod(positions, w)
+    if positions.size:
+        sample = images.transpose(1, 2, 0, 3).vindex[rows, cols].compute()  # (n, K, 3)
+    else:
+        sample = _np.zeros((0, k, 3), _np.float32)
+    plan = _core.plan_normals(sample, positions, w, h, directions, intensities, model, material,
+                              discard_dark, discard_bright, fast, shadow_threshold)
+    plan["options"]["plan_sample"] = plan_sample
+
+    mask_da = da.from_array(mask_np, chunks=images.chunks[1:3])
+    # blockwise passes non-array arguments positionally with index None.
+    stacked = da.blockwise(_solve_block, "hwc", images, "khwd", mask_da, "hw", directions, None,
+                           intensities, None, plan, None, threads_per_block, None,
+                           new_axes={"c": 11}, concatenate=True, dtype=_np.float32,
+                           meta=_np.empty((0, 0, 0), _np.float32))
+    out = {name: stacked[..., index] for name, index in _MAPS.items()}
+    out["model"] = plan["options"]["model"]
+    out["shininess"] = plan["options"]["shininess"]
+    out["ambient_term"] = _np.asarray(plan["options"]["ambient_term"])
+    out["plan"] = plan
+
+    def median_ks(specular, residual):
+        solved = specular[residual >= 0]
+        if plan["options"]["material_known"]:
+            return _np.asarray(plan["options"]["ks"])
+        if solved.size == 0 or plan["options"]["model"] == "lambert":
+            return _np.zeros(3)
+        # The upper median, as the C++ solver's nth_element at n/2.
+        return _np.sort(solved, axis=0)[solved.shape[0] // 2].astype(_np.float64)
+
+    if positions.size:
+        ks = dask.delayed(median_ks)(out["specular"].vindex[rows, cols],
+                                     out["residual"].vindex[rows, cols])
+    else:
+        ks = dask.delayed(median_ks)(_np.zeros((0, 3), _np.float32), _np.zeros(0, _np.float32))
+    out["ks"] = da.from_delayed(ks, shape=(3,), dtype=_np.float64)
+    return out
+
+
+def _binary():
+    """The iphong command: $IPHONG_BINARY, the build tree this module sits in, or PATH."""
+    if _os.environ.get("IPHONG_BINARY"):
+        return _os.environ["IPHONG_BINARY"]
+    built = _pathlib.Path(__file__).resolve().parents[2] / "iphong"
+    if built.exists():
+        return str(built)
+    found = _shutil.which("iphong")
+    if not found:
+        raise FileNotFoundError("no iphong binary: set IPHONG_BINARY or put iphong on PATH")
+    return found
+
+
+def _run_normals(binary, dataset, output, integrate, threads, extra):
+    start = _time.monotonic()
+    args = [binary, "normals", str(dataset), "-o", str(output), "--quiet", "--threads",
+            str(threads), *extra]
+    if integrate:
+        args.append("--integrate")
+    done = _subprocess.run(args, capture_output=True, text=True)
+    lines = [line for line in done.stderr.splitlines() if line.startswith("iphong: error: ")]
+    return {"dataset": str(dataset), "output": str(output), "ok": done.returncode == 0,
+            "exit_code": done.returncode,
+            "error": (lines[0][len("iphong: error: "):] if lines else done.stderr.strip())
+            if done.returncode else "",
+            "seconds": _time.monotonic() - start}
+
+
+def process_datasets(paths, output_root, client=None, integrate=False, threads=1, extra_args=()):
+    """`iphong normals` (and --integrate) on every capture folder in `paths`, one task each.
+
+    Each writes output_root/<folder name> (complete or not at all: the command's own rule; two
+    folders with the same name are refused before anything runs). client: a
+    dask.distributed.Client (tasks on its workers, which need this module and the iphong binary
+    at the same path, or IPHONG_BINARY) or None (Dask's local threads). threads: --threads per
+    task. Returns one dict per dataset, in order: dataset, output, ok, exit_code, error (the
+    command's one-line message), seconds. A failure does not stop the others.
+    """
+    import dask
+
+    paths = [_pathlib.Path(p) for p in paths]
+    root = _pathlib.Path(output_root)
+    names = [p.resolve().name for p in paths]
+    if len(set(names)) != len(names):
+        raise ValueError("two datasets have the same folder name; their outputs would collide")
+    root.mkdir(parents=True, exist_ok=True)
+    binary = _binary()
+    tasks = [dask.delayed(_run_normals, pure=False)(binary, p, root / n, integrate, threads,
+                                                    list(extra_args))
+             for p, n in zip(paths, names)]
+    if client is not None:
+        return list(client.gather(client.compute(tasks)))
+    return list(dask.compute(*tasks, scheduler="threads"))

@@ -1,0 +1,119 @@
+"""iphong.dask: normals from a chunked dask.array equal iphong.estimate_normals on the whole array
+value for value, for any chunking, on Dask's local scheduler and on a real two-process
+distributed.LocalCluster; process_datasets runs `iphong normals` per folder and reports failures
+without stopping the others."""
+import json
+import pathlib
+import shutil
+
+import numpy as np
+import pytest
+
+import iphong
+
+dask = pytest.importorskip("dask", reason="python3-dask not installed (scripts/setup-debian.sh)")
+da = pytest.importorskip("dask.array")
+import iphong.dask as idask  # noqa: E402
+
+MATERIAL = {"ka": 0.05, "kd": [0.6, 0.5, 0.4], "ks": 0.3, "shininess": 30}
+SCENE = {"width": 48, "height": 40, "ambient": 0.5,
+         "lights": [{"type": "hemisphere", "count": 30, "min_elevation_deg": 30}],
+         "objects": [{"shape": "sphere", "radius": 0.9, "subdivisions": 5, "material": MATERIAL}],
+         "noise": {"gaussian_sigma": 0.003, "seed": 5}}
+MAPS = ("normals", "albedo", "specular", "residual", "model_map")
+
+
+@pytest.fixture(scope="module")
+def capture():
+    return iphong.render(SCENE, per_light=True)
+
+
+@pytest.fixture(scope="module")
+def whole(capture):
+    return iphong.estimate_normals(capture["images"], capture["light_directions"],
+                                   capture["light_intensities"], capture["mask"])
+
+
+def solve(capture, chunks, **kwargs):
+    images = da.from_array(capture["images"], chunks=(-1, *chunks, -1))
+    return idask.estimate_normals(images, capture["light_directions"],
+                                  capture["light_intensities"], capture["mask"], **kwargs)
+
+
+@pytest.mark.parametrize("chunks", [(40, 48), (7, 11), (13, 48)])
+def test_any_chunking_equals_the_whole(capture, whole, chunks):
+    r = solve(capture, chunks)
+    assert r["normals"].chunks[:2] == da.from_array(capture["images"],
+                                                    chunks=(-1, *chunks, -1)).chunks[1:3]
+    computed = dask.compute(*(r[m] for m in MAPS), r["ks"], scheduler="threads")
+    for name, value in zip(MAPS, computed):
+        np.testing.assert_array_equal(value, whole[name], err_msg=name)
+    assert r["model"] == whole["model"] and r["shininess"] == whole["shininess"]
+    np.testing.assert_array_equal(r["ambient_term"], whole["ambient_term"])
+    np.testing.assert_array_equal(computed[-1], whole["ks"])
+
+
+def test_plan_sample_subset_is_independent_of_chunking(capture):
+    """A plan sample smaller than the object (a stride subset): still the same for any chunks."""
+    a = solve(capture, (40, 48), plan_sample=200)
+    b = solve(capture, (9, 10), plan_sample=200)
+    a["plan"].pop("model_seconds"), b["plan"].pop("model_seconds")
+    assert a["plan"] == b["plan"]
+    for name in MAPS:
+        np.testing.assert_array_equal(a[name].compute(), b[name].compute(), err_msg=name)
+
+
+def test_known_material_and_lambert(capture):
+    for kwargs in ({"material": dict(MATERIAL, ambient=0.5)}, {"model": "lambert"}):
+        expected = iphong.estimate_normals(capture["images"], capture["light_directions"],
+                                           capture["light_intensities"], capture["mask"], **kwargs)
+        r = solve(capture, (10, 12), **kwargs)
+        for name in ("normals", "albedo", "residual"):
+            np.testing.assert_array_equal(r[name].compute(), expected[name], err_msg=name)
+
+
+def test_bad_arrays_raise_value_error(capture):
+    images = da.from_array(capture["images"], chunks=(10, 20, 20, 3))
+    with pytest.raises(ValueError, match="chunk over H and W only"):
+        idask.estimate_normals(images, capture["light_directions"])
+    with pytest.raises(ValueError, match=r"expected \(K, H, W, 3\)"):
+        idask.estimate_normals(da.zeros((3, 4, 4)), np.eye(3))
+    with pytest.raises(ValueError, match="mask: expected"):
+        idask.estimate_normals(da.from_array(capture["images"]), capture["light_directions"],
+                               mask=np.ones((3, 3), bool))
+    with pytest.raises(ValueError, match="plan: not a plan"):
+        iphong.solve_normals_block(capture["images"], None, capture["light_directions"],
+                                   plan={"options": {}})
+
+
+def test_distributed_cluster_equals_the_whole(capture, whole):
+    distributed = pytest.importorskip("distributed",
+                                      reason="python3-distributed not installed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        r = solve(capture, (10, 24))
+        normals, ks = client.compute([r["normals"], r["ks"]], sync=True)
+        np.testing.assert_array_equal(normals, whole["normals"])
+        np.testing.assert_array_equal(ks, whole["ks"])
+
+
+def test_process_datasets_reports_each(tmp_path):
+    iphong_binary = pathlib.Path(iphong.__file__).resolve().parents[2] / "iphong"
+    if not iphong_binary.exists():
+        pytest.skip(f"no iphong binary at {iphong_binary}")
+    good = tmp_path / "in" / "sphere"
+    good.parent.mkdir()
+    out = iphong.render(SCENE, per_light=True)
+    iphong.save_dataset(str(good), out["images"], out["light_directions"],
+                        out["light_intensities"], out["mask"])
+    bad = tmp_path / "in" / "broken"
+    shutil.copytree(good, bad)
+    (bad / "light_directions.txt").write_text("0 0 1\n")  # one light for 30 images
+    results = idask.process_datasets([good, bad], tmp_path / "out")
+    assert [r["ok"] for r in results] == [True, False]
+    assert json.loads((tmp_path / "out" / "sphere" / "metrics.json").read_text())["images"] == 30
+    assert "light_directions.txt" in results[1]["error"]
+    assert not (tmp_path / "out" / "broken").exists()
+    with pytest.raises(ValueError, match="same folder name"):
+        idask.process_datasets([good, good], tmp_path / "out2")
