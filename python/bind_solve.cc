@@ -76,6 +76,12 @@ solve::NormalOptions OptionsFrom(const py::object& model, const py::object& mate
   return options;
 }
 
+// light_intensities (K, 3), or None: all ones.
+std::vector<Vec3d> Intensities(const py::object& light_intensities, std::size_t k) {
+  return light_intensities.is_none() ? std::vector<Vec3d>(k, Vec3d::Ones())
+                                     : ToRows(light_intensities, k, "light_intensities");
+}
+
 py::list ToList(const Vec3d& v) { return py::cast(std::vector<double>{v[0], v[1], v[2]}); }
 
 py::dict CandidateDict(const solve::ModelCandidate& c) {
@@ -209,9 +215,7 @@ void BindSolve(py::module_& m) {
         data.height = height;
         data.images = static_cast<int>(k);
         data.light_directions = ToDirections(light_directions, k);
-        data.light_intensities = light_intensities.is_none()
-                                     ? std::vector<Vec3d>(k, Vec3d::Ones())
-                                     : ToRows(light_intensities, k, "light_intensities");
+        data.light_intensities = Intensities(light_intensities, k);
         const std::int64_t* p = positions.data();
         for (std::size_t i = 0; i < n; ++i) {
           if (p[i] < 0 || p[i] >= std::int64_t{width} * height || (i > 0 && p[i] <= p[i - 1])) {
@@ -250,11 +254,8 @@ dict of plain values for solve_normals_block. Arguments as estimate_normals.)doc
         plan.options.threads = threads;
         const FloatStack images = ToImageStack(images_in);
         const std::size_t k = images.shape(0);
-        const std::vector<Vec3d> intensities =
-            light_intensities.is_none() ? std::vector<Vec3d>(k, Vec3d::Ones())
-                                        : ToRows(light_intensities, k, "light_intensities");
-        const solve::PhotometricData data =
-            ToObservations(images, ToDirections(light_directions, k), intensities, mask_in);
+        const solve::PhotometricData data = ToObservations(
+            images, ToDirections(light_directions, k), Intensities(light_intensities, k), mask_in);
         if (k < 3) throw std::invalid_argument("a block needs at least 3 images");
         solve::NormalResult r;
         {
@@ -291,11 +292,8 @@ depend on its own observations and the plan only, so any blocking gives the same
          double shadow_threshold, int threads) {
         const FloatStack images = ToImageStack(images_in);
         const std::size_t k = images.shape(0);
-        const std::vector<Vec3d> intensities =
-            light_intensities.is_none() ? std::vector<Vec3d>(k, Vec3d::Ones())
-                                        : ToRows(light_intensities, k, "light_intensities");
-        const solve::PhotometricData data =
-            ToObservations(images, ToDirections(light_directions, k), intensities, mask_in);
+        const solve::PhotometricData data = ToObservations(
+            images, ToDirections(light_directions, k), Intensities(light_intensities, k), mask_in);
         solve::NormalOptions options = OptionsFrom(model, material, discard_dark, discard_bright,
                                                    fast, shadow_threshold, threads);
         if (k < 3 && !options.known_albedo) {

@@ -45,6 +45,22 @@ nlohmann::json NormalsInputJson(const io::Dataset& d) {
           {"images", counts}};
 }
 
+nlohmann::json EstimatedMaterialJson(const solve::NormalResult& result) {
+  return {{"model", reflectance::LobeName(result.model)},
+          {"ks", {result.ks[0], result.ks[1], result.ks[2]}},
+          {"shininess", result.shininess},
+          {"ambient", {1, 1, 1}},
+          {"ka", {result.ambient_term[0], result.ambient_term[1], result.ambient_term[2]}},
+          {"comment", "estimated by iphong normals: " + result.specular_note}};
+}
+
+std::string MaterialLabel(const solve::NormalOptions& options, const solve::NormalResult& result) {
+  return options.material_known                         ? "known (material.json)"
+         : options.model == reflectance::Lobe::kLambert ? "lambertian"
+         : result.material_estimated                    ? "estimated"
+                                                        : "lambertian (chosen)";
+}
+
 solve::NormalOptions NormalOptionsFor(const NormalsCommandOptions& o, const io::Dataset& d) {
   solve::NormalOptions options;
   options.discard_dark = o.discard_dark;
@@ -192,10 +208,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   }
   metrics["dark_pixels"] = result.summary.dark_pixels;
   metrics["underdetermined_pixels"] = result.summary.underdetermined_pixels;
-  metrics["material"] = options.material_known                         ? "known (material.json)"
-                        : options.model == reflectance::Lobe::kLambert ? "lambertian"
-                        : result.material_estimated                    ? "estimated"
-                                                                       : "lambertian (chosen)";
+  metrics["material"] = MaterialLabel(options, result);
   if (!result.specular_note.empty()) metrics["specular_note"] = result.specular_note;
   std::optional<solve::AngularErrorMetrics> errors;
   if (!dataset.normal_gt.pixels.empty()) {
@@ -222,14 +235,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   if (!ambiguity.pixels.empty()) io::WriteImage(out.file("ambiguity.exr"), ambiguity);
   if (!result.model_map.pixels.empty()) io::WriteImage(out.file("model.exr"), result.model_map);
   if (result.material_estimated) {
-    nlohmann::json material = {
-        {"model", reflectance::LobeName(result.model)},
-        {"ks", {result.ks[0], result.ks[1], result.ks[2]}},
-        {"shininess", result.shininess},
-        {"ambient", {1, 1, 1}},
-        {"ka", {result.ambient_term[0], result.ambient_term[1], result.ambient_term[2]}},
-        {"comment", "estimated by iphong normals: " + result.specular_note}};
-    io::WriteTextFile(out.file("material.json"), material.dump(2) + "\n");
+    io::WriteTextFile(out.file("material.json"), EstimatedMaterialJson(result).dump(2) + "\n");
   }
   if (estimated) {
     io::WriteTextFile(out.file("light_intensities.txt"),

@@ -208,24 +208,14 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
   }
   metrics["dark_pixels"] = result.summary.dark_pixels;
   metrics["underdetermined_pixels"] = result.summary.underdetermined_pixels;
-  metrics["material"] = options.material_known                         ? "known (material.json)"
-                        : options.model == reflectance::Lobe::kLambert ? "lambertian"
-                        : result.material_estimated                    ? "estimated"
-                                                                       : "lambertian (chosen)";
+  metrics["material"] = MaterialLabel(options, result);
   if (!result.specular_note.empty()) metrics["specular_note"] = result.specular_note;
   if (!dataset.files.ground_truth_path.empty()) {
     metrics["ground_truth_note"] =
         "not compared in bands: the ground truth is read whole (iphong eval normals.exr DATASET)";
   }
   if (result.material_estimated) {
-    nlohmann::json material = {
-        {"model", reflectance::LobeName(result.model)},
-        {"ks", {result.ks[0], result.ks[1], result.ks[2]}},
-        {"shininess", result.shininess},
-        {"ambient", {1, 1, 1}},
-        {"ka", {result.ambient_term[0], result.ambient_term[1], result.ambient_term[2]}},
-        {"comment", "estimated by iphong normals: " + result.specular_note}};
-    io::WriteTextFile(out.file("material.json"), material.dump(2) + "\n");
+    io::WriteTextFile(out.file("material.json"), EstimatedMaterialJson(result).dump(2) + "\n");
   }
   metrics["total_seconds"] = started_seconds_ago + SecondsSince(start);
   io::WriteTextFile(out.file("metrics.json"), metrics.dump(2) + "\n");

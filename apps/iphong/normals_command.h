@@ -44,6 +44,11 @@ NormalsMemory EstimateNormalsMemory(const io::CaptureBands& capture,
 
 nlohmann::json NormalsInputJson(const io::Dataset& d);
 
+// material.json as `iphong normals` writes an estimated material.
+nlohmann::json EstimatedMaterialJson(const solve::NormalResult& result);
+// metrics.json's "material": known, lambertian, estimated or lambertian (chosen).
+std::string MaterialLabel(const solve::NormalOptions& options, const solve::NormalResult& result);
+
 // The solver's options from the command's flags and the capture's material.json.
 solve::NormalOptions NormalOptionsFor(const NormalsCommandOptions& o, const io::Dataset& d);
 

@@ -1,6 +1,7 @@
 #include "io/capture_bands.h"
 
 #include <algorithm>
+#include <filesystem>
 #include <stdexcept>
 
 #include "core/image_ops.h"
@@ -25,7 +26,10 @@ CaptureBands::CaptureBands(const std::string& directory, const DatasetLoadOption
   s.p = internal::Prepare(directory, s.options);
   const Dataset& d = s.p.d;
   // Every file's header now: a missing or wrong-sized image fails before any band is read.
-  const std::string reference = d.filenames[0];
+  // The file that set the size, named as LoadObservations names it.
+  const std::string reference = d.files.mask_path.empty()
+                                    ? d.filenames[0]
+                                    : std::filesystem::path(d.files.mask_path).filename().string();
   for (const std::string& path : d.files.paths) {
     auto reader = std::make_unique<ImageRowReader>(path);
     const ImageHeader& h = reader->header();
