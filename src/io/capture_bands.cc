@@ -13,8 +13,7 @@ namespace iphong::io {
 struct CaptureBands::State {
   internal::Prepared p;
   DatasetLoadOptions options;
-  std::vector<std::unique_ptr<ImageRowReader>> readers;
-  int channels = 3;  // the most any file has
+  std::vector<std::unique_ptr<ImageRowReader>> readers;  // opened by the first ReadBand
 };
 
 CaptureBands::CaptureBands(const std::string& directory, const DatasetLoadOptions& options)
@@ -24,8 +23,15 @@ CaptureBands::CaptureBands(const std::string& directory, const DatasetLoadOption
   s.options.load_images = false;
   s.options.load_ground_truth = false;
   s.p = internal::Prepare(directory, s.options);
+}
+
+// Every file's header, before the first band: a missing or wrong-sized image fails before any
+// band is decoded. Not in the constructor, so a capture that turns out to fit in memory (and is
+// read by LoadObservations) does not open its K files twice.
+void CaptureBands::OpenReaders() {
+  State& s = *state_;
+  if (!s.readers.empty()) return;
   const Dataset& d = s.p.d;
-  // Every file's header now: a missing or wrong-sized image fails before any band is read.
   // The file that set the size, named as LoadObservations names it.
   const std::string reference = d.files.mask_path.empty()
                                     ? d.filenames[0]
@@ -37,7 +43,6 @@ CaptureBands::CaptureBands(const std::string& directory, const DatasetLoadOption
       throw std::runtime_error(path + ": is " + SizeText(h.width, h.height) + ", but " + reference +
                                " is " + SizeText(d.file_width, d.file_height));
     }
-    s.channels = std::max(s.channels, h.channels);
     s.readers.push_back(std::move(reader));
   }
 }
@@ -56,7 +61,8 @@ double CaptureBands::BytesPerRow() const {
   const double threads = std::min<double>(ResolveThreads(s.options.threads), k);
   // The observations (K × 3 floats a pixel), and per decoding thread the file rows behind one
   // working row: decoded, as RGB and cropped (three copies at most), then downscaled.
-  return sizeof(float) * (k * 3 * width() + threads * scale * d.file_width * (s.channels + 6.0));
+  // Four channels at most are decoded (RGBA; more are read as they come, rarely).
+  return sizeof(float) * (k * 3 * width() + threads * scale * d.file_width * (4 + 6.0));
 }
 
 double CaptureBands::FixedBytes() const {
@@ -68,6 +74,7 @@ double CaptureBands::FixedBytes() const {
 
 solve::PhotometricData CaptureBands::ReadBand(int y0, int y1, bool count) {
   State& s = *state_;
+  OpenReaders();
   Dataset& d = s.p.d;
   const int w = width(), scale = s.options.capture.downscale;
   if (y0 < 0 || y1 > height() || y1 <= y0) throw std::logic_error("band outside the capture");

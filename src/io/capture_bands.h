@@ -16,8 +16,9 @@ namespace iphong::io {
 
 class CaptureBands {
  public:
-  // Finds and checks the capture as LoadDataset does, the images' headers included; reads no
-  // pixels and no ground truth. Throws as LoadDataset.
+  // Finds and checks the capture as LoadDataset does (the first image's header, the mask); reads
+  // no pixels and no ground truth. Every other image's header is checked by the first ReadBand.
+  // Throws as LoadDataset.
   CaptureBands(const std::string& directory, const DatasetLoadOptions& options);
   ~CaptureBands();
 
@@ -36,6 +37,7 @@ class CaptureBands {
 
  private:
   struct State;
+  void OpenReaders();  // every image's header, on the first ReadBand
   std::unique_ptr<State> state_;
 };
 
