@@ -6,6 +6,19 @@
 #include "core/timing.h"
 
 namespace iphong::solve {
+namespace {
+
+// The plan-sample positions that fall in a band of `count` masked pixels starting at masked
+// position `position`, as positions within the band; advances `next` past them.
+std::vector<std::size_t> SampleInBand(std::vector<std::size_t>::const_iterator& next,
+                                      std::vector<std::size_t>::const_iterator end,
+                                      std::size_t position, std::size_t count) {
+  std::vector<std::size_t> local;
+  for (; next != end && *next < position + count; ++next) local.push_back(*next - position);
+  return local;
+}
+
+}  // namespace
 
 NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
                                     const NormalOptions& options,
@@ -20,11 +33,11 @@ NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
 
   // Pass 1: the plan sample's observations, in the masked-pixel order EstimateNormals uses.
   // Woodham and known coefficients decide nothing for the whole object: no first pass.
-  const bool planned = options.model != reflectance::Lobe::kLambert && !options.material_known;
+  const bool planned = NeedsPlanSample(options);
   const auto start = Clock::now();
   PhotometricData sampled;
   std::size_t position = 0;  // masked pixels before this band
-  auto next = sample.begin();
+  auto next = sample.cbegin();
   for (int y0 = 0; planned && y0 < source.height; y0 += band_rows) {
     const int y1 = std::min(source.height, y0 + band_rows);
     const PhotometricData band = source.read(y0, y1, true);
@@ -35,12 +48,9 @@ NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
       sampled.light_directions = band.light_directions;
       sampled.light_intensities = band.light_intensities;
     }
-    const std::size_t values = static_cast<std::size_t>(band.images) * 3;
-    for (; next != sample.end() && *next < position + band.pixel_count(); ++next) {
-      const std::size_t i = *next - position;
-      sampled.pixels.push_back(band.pixels[i] + y0 * source.width);
-      sampled.values.insert(sampled.values.end(), band.pixel(i), band.pixel(i) + values);
-    }
+    AppendObservations(sampled, band,
+                       SampleInBand(next, sample.cend(), position, band.pixel_count()),
+                       static_cast<std::size_t>(y0) * source.width);
     position += band.pixel_count();
     if (progress.rows) progress.rows(1, y1);
   }
@@ -63,18 +73,14 @@ NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
   total.summary.model_seconds = plan.model_seconds;
   std::vector<Vec3f> sample_ks;
   position = 0;
-  next = sample.begin();
+  next = sample.cbegin();
   for (int y0 = 0; y0 < source.height; y0 += band_rows) {
     const int y1 = std::min(source.height, y0 + band_rows);
     const PhotometricData band = source.read(y0, y1, !planned);
     if (!planned && y0 == 0) plan = PlanNormals(SubsetObservations(band, {}), options);
     NormalResult r = SolveNormalsWithPlan(band, plan);
-    for (; next != sample.end() && *next < position + band.pixel_count(); ++next) {
-      const std::size_t p = static_cast<std::size_t>(band.pixels[*next - position]);
-      if (r.specular.pixels.empty() || r.residual.pixels[p] < 0) continue;
-      const float* v = r.specular.pixels.data() + 3 * p;
-      sample_ks.emplace_back(v[0], v[1], v[2]);
-    }
+    AppendSampleSpecular(r, band, SampleInBand(next, sample.cend(), position, band.pixel_count()),
+                         sample_ks);
     position += band.pixel_count();
     NormalSummary& s = total.summary;
     s.solve_seconds += r.summary.solve_seconds + r.summary.init_seconds;

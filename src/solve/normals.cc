@@ -51,21 +51,6 @@ Vec3d MedianKs(const std::vector<Vec3f>& ks) {
   return out;
 }
 
-// The specular coefficients of the solved pixels among `sample` (positions in data's order).
-std::vector<Vec3f> SampleSpecular(const NormalResult& result, const PhotometricData& data,
-                                  const std::vector<std::size_t>& sample) {
-  std::vector<Vec3f> ks;
-  if (result.specular.pixels.empty()) return ks;
-  ks.reserve(sample.size());
-  for (std::size_t i : sample) {
-    const std::size_t p = static_cast<std::size_t>(data.pixels[i]);
-    if (result.residual.pixels[p] < 0) continue;
-    const float* v = result.specular.pixels.data() + 3 * p;
-    ks.emplace_back(v[0], v[1], v[2]);
-  }
-  return ks;
-}
-
 }  // namespace
 
 std::string NormalOptions::Validate() const {
@@ -111,15 +96,35 @@ PhotometricData SubsetObservations(const PhotometricData& data,
   out.images = data.images;
   out.light_directions = data.light_directions;
   out.light_intensities = data.light_intensities;
-  const std::size_t values = static_cast<std::size_t>(data.images) * 3;
-  out.pixels.reserve(indices.size());
-  out.values.reserve(indices.size() * values);
-  for (std::size_t i : indices) {
-    if (i >= data.pixel_count()) throw std::invalid_argument("sample index beyond the pixels");
-    out.pixels.push_back(data.pixels[i]);
-    out.values.insert(out.values.end(), data.pixel(i), data.pixel(i) + values);
-  }
+  AppendObservations(out, data, indices, 0);
   return out;
+}
+
+void AppendObservations(PhotometricData& to, const PhotometricData& from,
+                        const std::vector<std::size_t>& indices, std::size_t pixel_offset) {
+  const std::size_t values = static_cast<std::size_t>(from.images) * 3;
+  to.pixels.reserve(to.pixels.size() + indices.size());
+  to.values.reserve(to.values.size() + indices.size() * values);
+  for (std::size_t i : indices) {
+    if (i >= from.pixel_count()) throw std::invalid_argument("sample index beyond the pixels");
+    to.pixels.push_back(static_cast<int>(from.pixels[i] + pixel_offset));
+    to.values.insert(to.values.end(), from.pixel(i), from.pixel(i) + values);
+  }
+}
+
+void AppendSampleSpecular(const NormalResult& result, const PhotometricData& data,
+                          const std::vector<std::size_t>& indices, std::vector<Vec3f>& ks) {
+  if (result.specular.pixels.empty()) return;
+  for (std::size_t i : indices) {
+    const std::size_t p = static_cast<std::size_t>(data.pixels[i]);
+    if (result.residual.pixels[p] < 0) continue;
+    const float* v = result.specular.pixels.data() + 3 * p;
+    ks.emplace_back(v[0], v[1], v[2]);
+  }
+}
+
+bool NeedsPlanSample(const NormalOptions& options) {
+  return options.model != reflectance::Lobe::kLambert && !options.material_known;
 }
 
 namespace {
@@ -141,7 +146,7 @@ NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& optio
   plan.options = options;
   plan.requested_model = options.model;
   NormalOptions& o = plan.options;
-  if (o.model == reflectance::Lobe::kLambert || o.material_known) return plan;
+  if (!NeedsPlanSample(o)) return plan;
   const auto start = Clock::now();
   ModelChoiceSettings choice;
   choice.fit = FitSettingsOf(o);
@@ -341,7 +346,9 @@ NormalResult EstimateNormals(const PhotometricData& data, const NormalOptions& o
                               ? PlanNormals(data, options)
                               : PlanNormals(SubsetObservations(data, sample), options);
   NormalResult result = SolveNormalsWithPlan(data, plan);
-  FinishNormals(result, plan, SampleSpecular(result, data, sample));
+  std::vector<Vec3f> sample_ks;
+  AppendSampleSpecular(result, data, sample, sample_ks);
+  FinishNormals(result, plan, sample_ks);
   return result;
 }
 

@@ -124,6 +124,16 @@ std::vector<std::size_t> PlanSampleIndices(std::size_t masked_pixels, std::size_
 // The observations of the pixels at `indices` (positions in data's masked-pixel order).
 PhotometricData SubsetObservations(const PhotometricData& data,
                                    const std::vector<std::size_t>& indices);
+// Appends those observations to `to` (same lights), their pixel indices shifted by
+// `pixel_offset` (a band's first pixel in the whole image).
+void AppendObservations(PhotometricData& to, const PhotometricData& from,
+                        const std::vector<std::size_t>& indices, std::size_t pixel_offset);
+// Appends the specular coefficients of the solved pixels among `indices` (positions in data's
+// order) of a result of SolveNormalsWithPlan on `data`: what FinishNormals takes.
+void AppendSampleSpecular(const NormalResult& result, const PhotometricData& data,
+                          const std::vector<std::size_t>& indices, std::vector<Vec3f>& ks);
+// Whether PlanNormals decides anything from the sample: not for Woodham nor known coefficients.
+bool NeedsPlanSample(const NormalOptions& options);
 
 struct NormalPlan {
   NormalOptions options;  // as asked, with the model, shininess and ambient term decided
