@@ -92,22 +92,9 @@ solve::PhotometricData CaptureBands::ReadBand(int y0, int y1, bool count) {
   ParallelFor(0, k, 1, s.options.threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t j = b; j < e; ++j) {
       try {
-        ImageF rows = internal::ToRgb(
-            s.readers[j]->ReadRows(offset_y + file_y0, offset_y + file_y0 + file_rows));
-        if (crop.width > 0) rows = CropImage(rows, {crop.x, 0, crop.width, file_rows});
-        if (count) {
-          // As ReadWorkingImage: counted on the stored code values, inside the file mask.
-          ImageCounts& counts = d.image_counts[j];
-          for (std::size_t q = 0; q < rows.pixel_count(); ++q) {
-            if (!s.p.file_mask.inside[static_cast<std::size_t>(file_y0) * rows.width + q]) continue;
-            const float* v = rows.pixels.data() + 3 * q;
-            if (v[0] == 0 && v[1] == 0 && v[2] == 0) ++counts.black;
-            if (s.p.integer_files && (v[0] >= 1 || v[1] >= 1 || v[2] >= 1)) ++counts.saturated;
-          }
-          counts.pixels = s.p.counted_pixels;
-        }
-        if (s.p.srgb) LinearizeSrgb(rows);
-        const ImageF band = DownscaleImage(rows, scale);
+        const ImageF band = internal::WorkingRows(
+            s.p, s.readers[j]->ReadRows(offset_y + file_y0, offset_y + file_y0 + file_rows), 0,
+            file_rows, file_y0, scale, count ? &d.image_counts[j] : nullptr);
         if (auto m = solve::GatherImage(data, static_cast<int>(j), band.pixels.data());
             !m.empty()) {
           errors[j] = d.files.paths[j] + ": rows " + std::to_string(offset_y + file_y0) + ".." +

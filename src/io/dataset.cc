@@ -345,6 +345,28 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
   return p;
 }
 
+ImageF WorkingRows(const Prepared& p, ImageF rows, int skip, int count, int file_y0, int downscale,
+                   ImageCounts* counts) {
+  rows = ToRgb(std::move(rows));
+  if (p.crop.width > 0 || skip > 0 || count != rows.height) {
+    rows = CropImage(rows, {p.crop.width > 0 ? p.crop.x : 0, skip,
+                            p.crop.width > 0 ? p.crop.width : rows.width, count});
+  }
+  if (counts) {
+    // Saturation is a property of the stored code values: counted before any averaging.
+    const std::size_t first = static_cast<std::size_t>(file_y0) * rows.width;
+    for (std::size_t q = 0; q < rows.pixel_count(); ++q) {
+      if (!p.file_mask.inside[first + q]) continue;
+      const float* v = rows.pixels.data() + 3 * q;
+      if (v[0] == 0 && v[1] == 0 && v[2] == 0) ++counts->black;
+      if (p.integer_files && (v[0] >= 1 || v[1] >= 1 || v[2] >= 1)) ++counts->saturated;
+    }
+    counts->pixels = p.counted_pixels;
+  }
+  if (p.srgb) LinearizeSrgb(rows);
+  return DownscaleImage(rows, downscale);
+}
+
 }  // namespace internal
 
 namespace {
@@ -356,19 +378,10 @@ using internal::Prepared;
 ImageF ReadWorkingImage(const Prepared& p, std::size_t j, const std::string& reference,
                         const DatasetLoadOptions& options, ImageCounts* counts) {
   const Dataset& d = p.d;
-  const std::string& path = d.files.paths[j];
-  ImageF image = ReadDatasetImage(path, d.file_width, d.file_height, reference, options.memory);
-  if (p.crop.width > 0) image = CropImage(image, p.crop);
-  // Saturation is a property of the stored code values: counted before any averaging.
-  for (std::size_t q = 0; q < image.pixel_count(); ++q) {
-    if (!p.file_mask.inside[q]) continue;
-    const float* v = image.pixels.data() + 3 * q;
-    if (v[0] == 0 && v[1] == 0 && v[2] == 0) ++counts->black;
-    if (p.integer_files && (v[0] >= 1 || v[1] >= 1 || v[2] >= 1)) ++counts->saturated;
-  }
-  counts->pixels = p.counted_pixels;
-  if (p.srgb) LinearizeSrgb(image);
-  return DownscaleImage(image, options.capture.downscale);
+  const int rows = p.crop.width > 0 ? p.crop.height : d.file_height;
+  return internal::WorkingRows(
+      p, ReadDatasetImage(d.files.paths[j], d.file_width, d.file_height, reference, options.memory),
+      p.crop.width > 0 ? p.crop.y : 0, rows, 0, options.capture.downscale, counts);
 }
 
 }  // namespace

@@ -24,4 +24,11 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
 // Gray (one channel) to RGB by repetition; RGBA loses A.
 ImageF ToRgb(ImageF image);
 
+// Decoded rows of a capture file (full width) brought to the working size, as every reader of
+// captures does: to RGB; rows [skip, skip + count) and the crop's columns kept; the clipped and
+// black pixels counted into `counts` (when given) inside the file mask, whose row `file_y0` the
+// first kept row is (cropped frame); sRGB linearized; downscaled.
+ImageF WorkingRows(const Prepared& p, ImageF rows, int skip, int count, int file_y0, int downscale,
+                   ImageCounts* counts);
+
 }  // namespace iphong::io::internal
