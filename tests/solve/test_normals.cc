@@ -8,6 +8,7 @@
 #include "render/renderer.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
+#include "solve/search.h"
 
 namespace iphong::solve {
 namespace {
@@ -305,6 +306,28 @@ TEST(Normals, GlobalSearchLeavesNoPixelInAWrongBasin) {
   RecordProperty("worst_deg", std::to_string(worst));
   EXPECT_LT(e.mean_deg, 0.01);
   EXPECT_LT(worst, 0.1);
+}
+
+// Each fine candidate of the search's table belongs to its nearest coarse direction, exactly as
+// comparing it with every coarse direction finds (the table compares only a band of z).
+TEST(Normals, CandidateTableGroupsEachDirectionWithItsNearestCoarseOne) {
+  const std::vector<Vec3d> lights = {Vec3d(0, 0, 1), Vec3d(0.6, 0, 0.8), Vec3d(0, 0.6, 0.8)};
+  for (int count : {16, 100, 1000, 4097, 16384}) {
+    const CandidateTable table(lights, reflectance::ModelOptions{}, 10, count);
+    const std::vector<Vec3d> coarse = HemisphereDirections(std::max(4, count / 4));
+    ASSERT_EQ(table.size(), count + static_cast<int>(coarse.size()));
+    std::vector<int> owner(count, -1);
+    for (int c = table.fine_count(); c < table.size(); ++c) {
+      for (int f : table.members(c)) owner[f] = c - table.fine_count();
+    }
+    for (int f = 0; f < count; ++f) {
+      const Vec3d& n = table.normal(f);
+      int nearest = 0;
+      for (int c = 1; c < static_cast<int>(coarse.size()); ++c)
+        if (coarse[c].dot(n) > coarse[nearest].dot(n)) nearest = c;
+      ASSERT_EQ(owner[f], nearest) << "count " << count << ", fine direction " << f;
+    }
+  }
 }
 
 // A ball above a floor: the floor sees the ball's cast shadow under several lights. Censored,
