@@ -322,6 +322,8 @@ depend on its own observations and the plan only, so any blocking gives the same
         for (const solve::ModelCandidate& c : result.model_choice.scored) {
           scores.append(py::dict(py::arg("model") = reflectance::LobeName(c.lobe),
                                  py::arg("shininess") = c.shininess,
+                                 py::arg("ambient_term") = ToList(c.ambient_term),
+                                 py::arg("ks_prior_weight") = c.ks_prior_weight,
                                  py::arg("heldout_cost") = c.heldout_cost));
         }
         out["model_scores"] = scores;

@@ -182,6 +182,8 @@ void RunNormals(const NormalsCommandOptions& o) {
     for (const solve::ModelCandidate& m : result.model_choice.scored) {
       scores.push_back({{"model", reflectance::LobeName(m.lobe)},
                         {"shininess", m.shininess},
+                        {"ambient_term", {m.ambient_term[0], m.ambient_term[1], m.ambient_term[2]}},
+                        {"ks_prior_weight", m.ks_prior_weight},
                         {"heldout_cost", m.heldout_cost},
                         {"heldout_error", m.heldout_error},
                         {"fold_angle_deg", m.fold_angle_deg}});

@@ -172,7 +172,8 @@ TEST(Normals, UnknownAmbientOfAnyStrength) {
     const NormalResult r = EstimateNormals(s.data, NormalOptions{});
     const double e = CompareNormals(r.normals, s.out.normal_cam, s.out.mask).mean_deg;
     table += " Ia " + std::to_string(ambient) + ": " + std::to_string(e) + " deg;";
-    // 0.07, 0.10, 0.25, 0.39: what remains is the chosen shininess's error, not the ambient.
+    // 0.13, 0.14, 0.15, 0.18: what remains is the chosen shininess's error, not the ambient
+    // (0.13, 0.10, 0.11, 0.40 when the lobe was chosen before the ambient term).
     EXPECT_LT(e, 0.5) << "ambient " << ambient;
     EXPECT_NEAR(r.ambient_term[0], 0.1 * ambient, 0.01) << "ambient " << ambient;
   }
@@ -195,7 +196,10 @@ TEST(Normals, FewLightsAreCrossValidatedLeavingOneOut) {
     const double e = CompareNormals(r.normals, s.out.normal_cam, s.out.mask).mean_deg;
     table += " Ia " + std::to_string(ambient) + ": " + std::to_string(e) + " deg;";
     EXPECT_NE(r.model, reflectance::Lobe::kLambert) << "ambient " << ambient;
-    EXPECT_LT(e, 0.75) << "ambient " << ambient;  // 0.21, 0.22, 0.14, 0.66 measured
+    // 0.21, 0.22, 0.21, 0.23 measured; 0.21, 0.22, 0.14, 0.66 when the lobe was chosen before
+    // the ambient term (at Ia 1 the broadest lobe imitated it).
+    EXPECT_LT(e, 0.5) << "ambient " << ambient;
+    EXPECT_NEAR(r.ambient_term[0], 0.1 * ambient, 0.01) << "ambient " << ambient;
   }
   RecordProperty("ring_table", table);
 }
