@@ -234,6 +234,7 @@ None; residual and pixels_used per light. Raises ValueError when an image has no
         out["light_intensities"] = ToArray(e.light_intensities);
         out["eigen_gap"] = e.eigen_gap;
         out["lambert_residual"] = e.lambert_residual;
+        out["code_offset"] = e.code_offset;
         out["seconds"] = e.seconds;
         return out;
       },
@@ -242,8 +243,10 @@ None; residual and pixels_used per light. Raises ValueError when an image has no
       R"doc(Each light's relative RGB intensity from images under known directions
 (semi-calibrated photometric stereo; `iphong normals --estimate-intensities`). Returns
 light_intensities (K, 3), each channel's mean 1, eigen_gap (how well determined: the second
-smallest eigenvalue over the smallest) and lambert_residual; raises ValueError when the images are
-too far from Lambertian for the estimate (a median relative residual over 0.05).)doc");
+smallest eigenvalue over the smallest), lambert_residual and code_offset (half a code step when
+integer-coded images were better explained as truncated, the estimate made on each code's middle;
+else 0); raises ValueError when the images are too far from Lambertian for the estimate (a median
+relative residual over 0.05).)doc");
 }
 
 }  // namespace iphong::python

@@ -88,8 +88,9 @@ py::dict CandidateDict(const solve::ModelCandidate& c) {
   return py::dict(
       py::arg("model") = reflectance::LobeName(c.lobe), py::arg("shininess") = c.shininess,
       py::arg("ks_prior_weight") = c.ks_prior_weight, py::arg("ks_prior") = ToList(c.ks_prior),
-      py::arg("ambient_term") = ToList(c.ambient_term), py::arg("heldout_cost") = c.heldout_cost,
-      py::arg("heldout_error") = c.heldout_error, py::arg("fold_angle_deg") = c.fold_angle_deg);
+      py::arg("ambient_term") = ToList(c.ambient_term), py::arg("code_offset") = c.code_offset,
+      py::arg("heldout_cost") = c.heldout_cost, py::arg("heldout_error") = c.heldout_error,
+      py::arg("fold_angle_deg") = c.fold_angle_deg);
 }
 
 solve::ModelCandidate CandidateFrom(const py::dict& d) {
@@ -99,6 +100,7 @@ solve::ModelCandidate CandidateFrom(const py::dict& d) {
   c.ks_prior_weight = d["ks_prior_weight"].cast<double>();
   c.ks_prior = ToRgb(d["ks_prior"], "plan ks_prior");
   c.ambient_term = ToRgb(d["ambient_term"], "plan ambient_term");
+  c.code_offset = d["code_offset"].cast<double>();
   c.heldout_cost = d["heldout_cost"].cast<double>();
   c.heldout_error = d["heldout_error"].cast<double>();
   c.fold_angle_deg = d["fold_angle_deg"].cast<double>();
@@ -118,8 +120,8 @@ py::dict PlanDict(const solve::NormalPlan& plan) {
       py::arg("per_pixel_model") = o.per_pixel_model,
       py::arg("color_residuals") = o.color_residuals, py::arg("max_iterations") = o.max_iterations,
       py::arg("material_known") = o.material_known,
-      py::arg("ambient_term") = ToList(o.ambient_term), py::arg("ks") = ToList(o.ks),
-      py::arg("shininess") = o.shininess,
+      py::arg("ambient_term") = ToList(o.ambient_term), py::arg("code_offset") = o.code_offset,
+      py::arg("ks") = ToList(o.ks), py::arg("shininess") = o.shininess,
       py::arg("known_albedo") = o.known_albedo ? py::object(ToList(*o.known_albedo)) : py::none());
   py::list scored;
   for (const solve::ModelCandidate& c : plan.model_choice.scored) scored.append(CandidateDict(c));
@@ -128,7 +130,8 @@ py::dict PlanDict(const solve::NormalPlan& plan) {
       py::arg("requested_model") = reflectance::LobeName(plan.requested_model),
       py::arg("chosen") = CandidateDict(plan.model_choice.chosen), py::arg("scored") = scored,
       py::arg("fold") = plan.model_choice.fold, py::arg("pixels") = plan.model_choice.pixels,
-      py::arg("note") = plan.model_choice.note, py::arg("model_seconds") = plan.model_seconds);
+      py::arg("code_step") = plan.model_choice.code_step, py::arg("note") = plan.model_choice.note,
+      py::arg("model_seconds") = plan.model_seconds);
 }
 
 solve::NormalPlan PlanFrom(const py::object& value) {
@@ -155,6 +158,7 @@ solve::NormalPlan PlanFrom(const py::object& value) {
     n.max_iterations = o["max_iterations"].cast<int>();
     n.material_known = o["material_known"].cast<bool>();
     n.ambient_term = ToRgb(o["ambient_term"], "plan ambient_term");
+    n.code_offset = o["code_offset"].cast<double>();
     n.ks = ToRgb(o["ks"], "plan ks");
     n.shininess = o["shininess"].cast<double>();
     if (!o["known_albedo"].is_none()) n.known_albedo = ToRgb(o["known_albedo"], "plan kd");
@@ -164,6 +168,7 @@ solve::NormalPlan PlanFrom(const py::object& value) {
       plan.model_choice.scored.push_back(CandidateFrom(c.cast<py::dict>()));
     plan.model_choice.fold = d["fold"].cast<std::vector<int>>();
     plan.model_choice.pixels = d["pixels"].cast<std::size_t>();
+    plan.model_choice.code_step = d["code_step"].cast<double>();
     plan.model_choice.note = d["note"].cast<std::string>();
     plan.model_seconds = d["model_seconds"].cast<double>();
   } catch (const py::error_already_set& e) {
@@ -315,16 +320,17 @@ depend on its own observations and the plan only, so any blocking gives the same
         out["ks"] = result.ks;
         out["shininess"] = result.shininess;
         out["ambient_term"] = result.ambient_term;
+        out["code_offset"] = result.code_offset;
         out["material_estimated"] = result.material_estimated;
         out["specular_identifiable"] = result.specular_identifiable;
         out["specular_note"] = result.specular_note;
         py::list scores;
         for (const solve::ModelCandidate& c : result.model_choice.scored) {
-          scores.append(py::dict(py::arg("model") = reflectance::LobeName(c.lobe),
-                                 py::arg("shininess") = c.shininess,
-                                 py::arg("ambient_term") = ToList(c.ambient_term),
-                                 py::arg("ks_prior_weight") = c.ks_prior_weight,
-                                 py::arg("heldout_cost") = c.heldout_cost));
+          scores.append(py::dict(
+              py::arg("model") = reflectance::LobeName(c.lobe), py::arg("shininess") = c.shininess,
+              py::arg("ambient_term") = ToList(c.ambient_term),
+              py::arg("ks_prior_weight") = c.ks_prior_weight,
+              py::arg("code_offset") = c.code_offset, py::arg("heldout_cost") = c.heldout_cost));
         }
         out["model_scores"] = scores;
         if (!result.model_map.pixels.empty()) out["model_map"] = ToArray(result.model_map);

@@ -149,8 +149,9 @@ void RunNormals(const NormalsCommandOptions& o) {
       throw std::runtime_error(o.dataset + ": --estimate-intensities: " + e.what());
     }
     loaded.observations.light_intensities = estimated->light_intensities;
-    Say(o.common, "Estimated the %d lights' intensities in %.2f s (eigenvalue gap %.1f)\n",
-        loaded.observations.images, estimated->seconds, estimated->eigen_gap);
+    Say(o.common, "Estimated the %d lights' intensities in %.2f s (eigenvalue gap %.1f%s)\n",
+        loaded.observations.images, estimated->seconds, estimated->eigen_gap,
+        estimated->code_offset > 0 ? "; integer codes taken as truncated" : "");
   }
   const solve::PhotometricData& data = loaded.observations;  // masked pixels only
 
@@ -184,6 +185,7 @@ void RunNormals(const NormalsCommandOptions& o) {
                         {"shininess", m.shininess},
                         {"ambient_term", {m.ambient_term[0], m.ambient_term[1], m.ambient_term[2]}},
                         {"ks_prior_weight", m.ks_prior_weight},
+                        {"code_offset", m.code_offset},
                         {"heldout_cost", m.heldout_cost},
                         {"heldout_error", m.heldout_error},
                         {"fold_angle_deg", m.fold_angle_deg}});
@@ -198,6 +200,8 @@ void RunNormals(const NormalsCommandOptions& o) {
                                {"pixels_choosing_lambert", chosen_pixels - specular_pixels},
                                {"shininess", result.shininess},
                                {"pixels", result.model_choice.pixels},
+                               {"integer_code_step", result.model_choice.code_step},
+                               {"code_offset", result.code_offset},
                                {"scores", scores}};
   }
   if (!ambiguity.pixels.empty()) {

@@ -97,6 +97,7 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     out["model"] = plan["options"]["model"]
     out["shininess"] = plan["options"]["shininess"]
     out["ambient_term"] = _np.asarray(plan["options"]["ambient_term"])
+    out["code_offset"] = plan["options"]["code_offset"]
     out["plan"] = plan
 
     def median_ks(specular, residual):

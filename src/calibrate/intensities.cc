@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include "calibrate/lights.h"
 #include "core/parallel.h"
 #include "core/timing.h"
+#include "solve/model_choice.h"
 
 namespace iphong::calibrate {
 
@@ -21,11 +23,10 @@ std::string IntensityOptions::Check() const {
   return "";
 }
 
-IntensityEstimate EstimateIntensities(const solve::PhotometricData& data,
-                                      const IntensityOptions& options) {
+namespace {
+
+IntensityEstimate EstimateOn(const solve::PhotometricData& data, const IntensityOptions& options) {
   const auto start = Clock::now();
-  if (std::string m = options.Check(); !m.empty()) throw std::invalid_argument(m);
-  if (std::string m = data.Validate(); !m.empty()) throw std::invalid_argument(m);
   const int k = data.images;
   if (k < 4) {
     throw std::invalid_argument("estimating intensities needs 4 images or more (got " +
@@ -179,6 +180,33 @@ IntensityEstimate EstimateIntensities(const solve::PhotometricData& data,
   }
   result.seconds = SecondsSince(start);
   return result;
+}
+
+}  // namespace
+
+IntensityEstimate EstimateIntensities(const solve::PhotometricData& data,
+                                      const IntensityOptions& options) {
+  if (std::string m = options.Check(); !m.empty()) throw std::invalid_argument(m);
+  if (std::string m = data.Validate(); !m.empty()) throw std::invalid_argument(m);
+  const double step = solve::IntegerCodeStep(data);
+  if (step < solve::kMinTestedCodeStep) return EstimateOn(data, options);
+  solve::PhotometricData middle = data;
+  for (float& v : middle.values) v = static_cast<float>(solve::AtCodeMiddle(v, step / 2));
+  // Each as recorded and at the middle; one may be refused (too far from Lambert).
+  std::optional<IntensityEstimate> best;
+  std::string refused;
+  for (const solve::PhotometricData* d :
+       {&data, static_cast<const solve::PhotometricData*>(&middle)}) {
+    try {
+      IntensityEstimate e = EstimateOn(*d, options);
+      e.code_offset = d == &middle ? step / 2 : 0;
+      if (!best || e.lambert_residual < best->lambert_residual) best = e;
+    } catch (const std::invalid_argument& e) {
+      if (refused.empty()) refused = e.what();
+    }
+  }
+  if (!best) throw std::invalid_argument(refused);
+  return *best;
 }
 
 }  // namespace iphong::calibrate

@@ -92,6 +92,7 @@ NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
       total.model = r.model;
       total.shininess = r.shininess;
       total.ambient_term = r.ambient_term;
+      total.code_offset = r.code_offset;
       total.model_choice = r.model_choice;
     }
     write(y0, r);

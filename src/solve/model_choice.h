@@ -25,6 +25,7 @@ struct ModelCandidate {
   double ks_prior_weight = 0;
   Vec3d ks_prior = Vec3d::Zero();
   Vec3d ambient_term = Vec3d::Zero();  // Ia⊙ka subtracted first (EstimateAmbient) or 0
+  double code_offset = 0;              // added to nonzero values first (NormalOptions) or 0
   double heldout_cost = 0;             // mean per pixel, in units of t²; filled by ChooseModel
   double heldout_error = 0;            // its standard error over the pixels
   double fold_angle_deg = 0;           // mean angle between the normals the two halves chose
@@ -63,8 +64,15 @@ struct ModelChoice {
   std::vector<ModelCandidate> scored;  // every model tried, in the order tried
   std::size_t pixels = 0;              // pixels scored
   std::vector<int> fold;               // each light's fold (FoldCount); empty when not tested
+  // The integer code step of the observations (IntegerCodeStep); at kMinTestedCodeStep or more
+  // every model is also scored as if the images were truncated (code_offset half of it).
+  double code_step = 0;
   std::string note;
 };
+
+// Codes of 10 bits or fewer are tested for truncation: from 11 bits half a code is below 0.025 %
+// of the range, under any photograph's noise.
+constexpr double kMinTestedCodeStep = 1.0 / 1023;
 
 // Throws nothing; with fewer than 6 lights (no half can be held out) the choice is Lambert.
 ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate> family,

@@ -30,6 +30,7 @@ PixelFitSettings FitSettingsOf(const NormalOptions& o) {
   s.shininess = o.shininess;
   if (o.material_known) s.known_ks = o.ks;
   s.ambient_term = o.ambient_term;
+  s.code_offset = o.code_offset;
   s.saturation = o.saturation;
   s.shadow_threshold = o.shadow_threshold;
   s.rounds = o.irls_rounds;
@@ -70,6 +71,7 @@ std::string NormalOptions::Validate() const {
   if (!ambient_term.allFinite() || (ambient_term.array() < 0).any()) {
     return "ambient term must be finite and >= 0";
   }
+  if (!(code_offset >= 0 && code_offset < 0.5)) return "code offset must be in [0, 0.5)";
   if (!ks.allFinite() || (ks.array() < 0).any() || !std::isfinite(shininess) || shininess < 0) {
     return "ks and shininess must be finite and >= 0";
   }
@@ -158,6 +160,7 @@ NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& optio
   o.model = plan.model_choice.chosen.lobe;
   o.shininess = plan.model_choice.chosen.shininess;
   o.ambient_term = plan.model_choice.chosen.ambient_term;
+  o.code_offset = plan.model_choice.chosen.code_offset;
   plan.model_seconds = SecondsSince(start);
   return plan;
 }
@@ -285,6 +288,7 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
   result.model = o.model;
   result.shininess = o.shininess;
   result.ambient_term = o.ambient_term;
+  result.code_offset = o.code_offset;
   const bool specular = o.model != reflectance::Lobe::kLambert;
   if (per_pixel_map) {
     result.model_map = ImageF(data.width, data.height, 1, -1.0f);

@@ -60,6 +60,13 @@ struct NormalOptions {
   bool color_residuals = true;
   int max_iterations = 10;  // per pixel and round
 
+  // Added to every nonzero channel of every observation before anything else (image units).
+  // Images stored as integer codes were either rounded (code k stands for k ± ½ a step) or
+  // truncated (k … k + 1: on average half a step brighter than k, a bias of 15 % at 3 codes of
+  // 8 bits); with the model chosen, the plan decides which by held-out prediction and sets this
+  // to 0 or half a step (ModelChoice::code_step). Zero codes stay zero: they are shadows.
+  double code_offset = 0;
+
   // Known coefficients (material.json). Otherwise the model is chosen and ks is free per pixel.
   bool material_known = false;
   Vec3d ambient_term = Vec3d::Zero();  // Ia ⊙ ka, subtracted from every image
@@ -96,6 +103,7 @@ struct NormalResult {
   Vec3d ks = Vec3d::Zero();                             // known, or the median of the pixels' ks
   double shininess = 1;
   Vec3d ambient_term = Vec3d::Zero();  // Ia ⊙ ka (known; 0 when estimated)
+  double code_offset = 0;              // NormalOptions::code_offset, as used
   bool material_estimated = false;
   bool specular_identifiable = true;  // false: the choice found no specular model predicts better
   std::string specular_note;

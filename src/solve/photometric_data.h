@@ -32,6 +32,17 @@ struct PhotometricData {
 // plane is not determined by any pixel's shading. One or two lights are left to the global solver.
 std::string CheckLightSpan(const std::vector<Vec3d>& light_directions);
 
+// The step of the integer codes the values are, 1/(2^b − 1) for the fewest bits b in 8…16 that
+// put every value within 1 % of a step of a code (an 8-bit file read as linear: 1/255), or 0
+// when they are not codes (floating-point files, downscaled or sRGB-decoded ones).
+double IntegerCodeStep(const PhotometricData& data);
+
+// A recorded value taken at the middle of its integer code's interval: `offset` (half a code
+// step) added when the images were truncated to codes, zero kept as zero (shadow, not a value).
+inline double AtCodeMiddle(double value, double offset) {
+  return value > 0 ? value + offset : value;
+}
+
 // The observations' layout for K images: the masked pixels and the lights, values zeroed.
 // Throws std::invalid_argument when the mask is not width×height.
 PhotometricData ObservationLayout(int width, int height, const Mask& mask,

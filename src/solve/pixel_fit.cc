@@ -216,16 +216,21 @@ bool PixelFitter::Prepare(std::size_t p) {
   const int k = st.data.images;
   st.obs = st.data.pixel(p);
   st.bright.clear();
+  double brightest = 0;
   for (int j = 0; j < k; ++j) {
     const Vec3d rgb(st.obs[3 * j], st.obs[3 * j + 1], st.obs[3 * j + 2]);
     const bool saturated = rgb.maxCoeff() >= st.settings.saturation;
     st.usable[j] = saturated ? 0.0 : 1.0;
-    const Vec3d y = (rgb - st.settings.ambient_term).cwiseQuotient(st.data.light_intensities[j]);
+    brightest = std::max(brightest, internal::Luminance(rgb));
+    const Vec3d code =
+        rgb.unaryExpr([&](double v) { return AtCodeMiddle(v, st.settings.code_offset); });
+    const Vec3d y = (code - st.settings.ambient_term).cwiseQuotient(st.data.light_intensities[j]);
     for (int c = 0; c < 3; ++c) st.y_rgb[3 * j + c] = y[c];
     st.y_lum[j] = internal::Luminance(y);
     if (!saturated) st.bright.push_back(st.y_lum[j]);
   }
-  st.dark = !(*std::max_element(st.y_lum.begin(), st.y_lum.end()) > 1e-8);
+  // Dark as recorded: with a code offset or below the ambient term every value may be nonzero.
+  st.dark = !(brightest > 1e-8) || !(*std::max_element(st.y_lum.begin(), st.y_lum.end()) > 1e-8);
   if (st.bright.size() < 3 || st.dark) return false;
   st.threshold = st.settings.shadow_threshold * internal::BrightnessScale(st.bright);
   st.model.y = st.model.channels == 1 ? st.y_lum.data() : st.y_rgb.data();
@@ -277,9 +282,12 @@ void PixelFitter::Fit(internal::PixelSolution& s) {
   for (int j = 0; j < k; ++j) {
     if (st.usable[j] == 0) continue;
     const Vec3d& e = st.data.light_intensities[j];
-    const Vec3d predicted = st.settings.ambient_term +
-                            reflectance::CombineFactors<double>(f[j], e, e, s.albedo, s.specular);
-    sq += (Vec3d(st.obs[3 * j], st.obs[3 * j + 1], st.obs[3 * j + 2]) - predicted).squaredNorm();
+    // Against the observation as the fit saw it (code offset on, ambient term off: y_j ⊙ E_j),
+    // in image units.
+    const Vec3d y(st.y_rgb[3 * j], st.y_rgb[3 * j + 1], st.y_rgb[3 * j + 2]);
+    sq +=
+        (y.cwiseProduct(e) - reflectance::CombineFactors<double>(f[j], e, e, s.albedo, s.specular))
+            .squaredNorm();
     used += 3;
   }
   s.residual = std::sqrt(sq / std::max(used, 1));

@@ -6,7 +6,8 @@
 // internal::EliminatedCoefficients), so their dependence on the normal enters the Jacobian.
 // Shadows are censored (internal::CensoredCost): each round refits with the observations the
 // last one found censored left out, until the normal stops moving. Saturated observations are
-// not used. Observations are y_j = (I_j − Ia⊙ka)/E_j; camera frame, V = (0, 0, 1).
+// not used. Observations are y_j = (I_j + c − Ia⊙ka)/E_j, c the code offset on nonzero channels;
+// camera frame, V = (0, 0, 1).
 #pragma once
 
 #include <memory>
@@ -27,11 +28,14 @@ struct PixelFitSettings {
   std::optional<Vec3d> ks_prior;
   double ks_prior_weight = 1;
   Vec3d ambient_term = Vec3d::Zero();  // Ia ⊙ ka
-  double saturation = 0.995;           // a channel at or above: the observation is not used
-  double shadow_threshold = 0.1;       // t as a fraction of the pixel's brightness
-  int rounds = 4;                      // reweighting rounds
-  int max_iterations = 10;             // per round
-  bool color_residuals = true;         // 3 channels, or their luminance (faster)
+  // Added to every nonzero channel of an observation before anything else: half a code step
+  // when the images were truncated to integer codes (NormalOptions::code_offset).
+  double code_offset = 0;
+  double saturation = 0.995;      // a channel at or above: the observation is not used
+  double shadow_threshold = 0.1;  // t as a fraction of the pixel's brightness
+  int rounds = 4;                 // reweighting rounds
+  int max_iterations = 10;        // per round
+  bool color_residuals = true;    // 3 channels, or their luminance (faster)
 };
 
 class PixelFitter {

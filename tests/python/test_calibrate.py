@@ -92,8 +92,8 @@ def test_diligent_ball_is_a_calibration_target_for_cat():
 
 
 @needs_diligent
-@pytest.mark.parametrize("name, intensity_bound, measured", [("cat", 0.032, 0.0295),
-                                                             ("ball", 0.025, 0.0229)])
+@pytest.mark.parametrize("name, intensity_bound, measured", [("cat", 0.032, 0.0224),
+                                                             ("ball", 0.025, 0.0197)])
 def test_semi_calibrated_intensities(name, intensity_bound, measured):
     d = iphong.load_dataset(CROP / name)
     estimate = iphong.estimate_intensities(d["images"], d["light_directions"], mask=d["mask"])
@@ -107,8 +107,10 @@ def test_semi_calibrated_intensities(name, intensity_bound, measured):
                                          mask=d["mask"])
         errors.append(iphong.angular_error(result["normals"], d["normal_gt"],
                                            d["mask"])["mean_angular_error_deg"])
-    # Measured: cat 5.75 -> 5.73 deg, ball 2.61 -> 2.75.
+    # Measured: cat 4.93 -> 4.98 deg, ball 1.90 -> 2.11 (the crops are truncated 8-bit codes:
+    # intensities estimated on them as recorded made the normals 5.74 and 2.75).
     assert errors[1] < errors[0] + 0.3, errors
+    assert estimate["code_offset"] == pytest.approx(0.5 / 255)
 
 
 def test_calibrate_lights_bad_arguments():

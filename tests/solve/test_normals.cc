@@ -2,6 +2,7 @@
 // input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "geometry/primitives.h"
@@ -202,6 +203,69 @@ TEST(Normals, FewLightsAreCrossValidatedLeavingOneOut) {
     EXPECT_NEAR(r.ambient_term[0], 0.1 * ambient, 0.01) << "ambient " << ambient;
   }
   RecordProperty("ring_table", table);
+}
+
+TEST(Normals, IntegerCodesAreRecognized) {
+  PhotometricData d;
+  d.images = 1;
+  d.values = {0.0f, 1 / 255.0f, 0.5f + 0.5f / 255, 1.0f, 37 / 255.0f, 254 / 255.0f};
+  EXPECT_DOUBLE_EQ(IntegerCodeStep(d), 1 / 255.0);
+  d.values = {0.0f, 1 / 65535.0f, 30001 / 65535.0f, 65534 / 65535.0f, 1.0f, 16384 / 65535.0f};
+  EXPECT_DOUBLE_EQ(IntegerCodeStep(d), 1 / 65535.0);
+  d.values = {0.0f, 1 / 1023.0f, 700 / 1023.0f};
+  EXPECT_DOUBLE_EQ(IntegerCodeStep(d), 1 / 1023.0);
+  // Floats, and 8-bit sRGB codes decoded to linear values, are not codes (a few values may be
+  // near one by chance, not a whole image's).
+  d.values.clear();
+  for (int i = 0; i < 100; ++i) d.values.push_back(static_cast<float>(0.01 * i + 0.00123 * i * i));
+  EXPECT_EQ(IntegerCodeStep(d), 0.0);
+  d.values.clear();
+  for (int k = 0; k < 256; k += 3) {
+    const double v = k / 255.0;
+    d.values.push_back(
+        static_cast<float>(v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4)));
+  }
+  EXPECT_EQ(IntegerCodeStep(d), 0.0);
+}
+
+// 8-bit images made by truncating (code k for a value in [k, k + 1)), as a conversion that
+// drops the low byte of 16-bit data does: on average half a code darker, a bias that grows to
+// tens of percent in the dark observations that decide the normal near the terminator. The plan
+// finds it by held-out prediction and takes each nonzero code at the middle of its interval;
+// rounded codes it leaves as they are.
+TEST(Normals, TruncatedIntegerCodesAreTakenAtTheirMiddle) {
+  // Dim, as DiLiGenT's 8-bit crops are (their median code is 12 to 17): kd 0.08 is 20 codes.
+  reflectance::Material dim;
+  dim.kd = Vec3d(0.08, 0.07, 0.06);
+  dim.ks = Vec3d::Constant(0.5);
+  dim.shininess = 50;
+  // 96 lights, as DiLiGenT has: with 48 the held-out choice did not tell the two apart (the
+  // codes were then taken as recorded, as before).
+  const Synthetic s = MakeSphereData(dim, 96, 0.0, Vec3d::Zero(), 64);
+  const auto quantized = [&](bool truncate) {
+    PhotometricData q = s.data;
+    for (float& v : q.values) {
+      const double code = std::clamp(v * 255.0, 0.0, 255.0);
+      v = static_cast<float>((truncate ? std::floor(code) : std::round(code)) / 255);
+    }
+    return q;
+  };
+  const PhotometricData truncated = quantized(true);
+  NormalPlan plan = PlanNormals(truncated, NormalOptions{});
+  EXPECT_DOUBLE_EQ(plan.model_choice.code_step, 1 / 255.0);
+  EXPECT_DOUBLE_EQ(plan.options.code_offset, 0.5 / 255);
+  EXPECT_EQ(PlanNormals(quantized(false), NormalOptions{}).options.code_offset, 0.0);
+  // With the model the plan chose, against the same codes taken as they are.
+  const auto error = [&](const NormalPlan& p) {
+    return CompareNormals(SolveNormalsWithPlan(truncated, p).normals, s.out.normal_cam, s.out.mask)
+        .mean_deg;
+  };
+  const double middle = error(plan);
+  plan.options.code_offset = 0;
+  const double as_recorded = error(plan);
+  std::printf("truncated 8-bit codes: %.3f deg at their middle, %.3f deg as recorded\n", middle,
+              as_recorded);
+  EXPECT_LT(middle, 0.7 * as_recorded);
 }
 
 // Two balls of different materials side by side: ks is free per pixel, so one shininess serves
