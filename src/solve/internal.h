@@ -134,6 +134,9 @@ struct PixelSolution {
   Vec3d albedo = Vec3d::Zero();
   Vec3d specular = Vec3d::Zero();  // this pixel's ks (RGB)
   double residual = -1;
+  // The censored cost of the luminance residuals at the normal (Σ_j ρ(r_j), CensoredCost): what
+  // tells two local fits of one pixel apart.
+  double cost = INFINITY;
   int iterations = 0;
 };
 

@@ -275,6 +275,22 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
         }
         s.normal = table.normal(r.candidate);
         fitter.Fit(s);
+        // With known coefficients the best candidates of other basins are fitted too
+        // (SearchResult::others), and the lowest censored cost after the local fit wins: on a
+        // torus one pixel in 5 400 kept a wrong basin 4.9° off without. With estimated ones on
+        // photos the lowest cost is not the better normal often enough: on the seven DiLiGenT
+        // runs it moved four by −0.02 to −0.09°, harvest by +0.26°, at a third more time.
+        for (const int other : r.others) {
+          if (other < 0 || !o.material_known) break;
+          PixelSolution alternative;
+          alternative.normal = table.normal(other);
+          fitter.Fit(alternative);
+          s.iterations += alternative.iterations;
+          if (alternative.cost < s.cost) {
+            alternative.iterations = s.iterations;
+            s = alternative;
+          }
+        }
         local += s.iterations;
       }
       iterations += local;

@@ -277,10 +277,14 @@ void PixelFitter::Fit(internal::PixelSolution& s) {
   s.specular = st.model.model.lobe == reflectance::Lobe::kLambert
                    ? Vec3d::Zero()
                    : Vec3d(coef[0].ks, coef[1].ks, coef[2].ks);
-  double sq = 0;
+  double sq = 0, cost = 0;
   int used = 0;
   for (int j = 0; j < k; ++j) {
     if (st.usable[j] == 0) continue;
+    cost += internal::CensoredCost(
+        st.y_lum[j] - internal::Luminance(reflectance::CombineFactors<double>(
+                          f[j], Vec3d::Ones(), Vec3d::Ones(), s.albedo, s.specular)),
+        st.threshold);
     const Vec3d& e = st.data.light_intensities[j];
     // Against the observation as the fit saw it (code offset on, ambient term off: y_j ⊙ E_j),
     // in image units.
@@ -291,6 +295,7 @@ void PixelFitter::Fit(internal::PixelSolution& s) {
     used += 3;
   }
   s.residual = std::sqrt(sq / std::max(used, 1));
+  s.cost = cost;
 }
 
 }  // namespace iphong::solve

@@ -160,14 +160,23 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
   }
   const int top = std::min<int>(refine_, static_cast<int>(scores_.size()));
   std::partial_sort(scores_.begin(), scores_.begin() + top, scores_.end());
-  SearchResult best;
-  best.cost = INFINITY;
   for (int i = 0; i < top; ++i) {
-    const int c = scores_[i].candidate;
+    Scored& s = scores_[i];
     // From the screening's least-squares coefficients, two rounds of the censoring's weights.
-    double kd = scores_[i].kd, ks = scores_[i].ks, cost = 0;
-    for (int round = 0; round < 2; ++round) cost = Refit(c, t, fixed_ks, &kd, &ks);
-    if (cost < best.cost) best = {c, cost, kd, ks};
+    for (int round = 0; round < 2; ++round) s.cost = Refit(s.candidate, t, fixed_ks, &s.kd, &s.ks);
+  }
+  std::stable_sort(scores_.begin(), scores_.begin() + top);  // ties keep their screening order
+  SearchResult best;
+  if (top == 0) return best;
+  best = {scores_[0].candidate, scores_[0].cost, scores_[0].kd, scores_[0].ks, {-1, -1}};
+  const double apart = std::cos(kOtherBasinDeg * M_PI / 180);
+  std::size_t found = 0;
+  for (int i = 1; i < top && found < best.others.size(); ++i) {
+    const Vec3d& n = table_.normal(scores_[i].candidate);
+    bool distinct = n.dot(table_.normal(best.candidate)) < apart;
+    for (std::size_t o = 0; o < found; ++o)
+      distinct = distinct && n.dot(table_.normal(best.others[o])) < apart;
+    if (distinct) best.others[found++] = scores_[i].candidate;
   }
   return best;
 }

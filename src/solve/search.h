@@ -15,6 +15,7 @@
 // Camera frame, V = (0, 0, 1).
 #pragma once
 
+#include <array>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -63,7 +64,16 @@ struct SearchResult {
   int candidate = -1;  // −1: no candidate explains anything (all observations unusable)
   double cost = 0;     // censored cost at the winner
   double kd = 0, ks = 0;
+  // The next best refined candidates in other basins (more than kOtherBasinDeg from the winner
+  // and from each other), −1 when none: starts for more local fits. On a grid, a highlight
+  // placed a few degrees off costs more than one left out as if shadowed, so the true basin's
+  // candidate can come second.
+  std::array<int, 2> others = {-1, -1};
 };
+
+// Candidates this far apart lie in different basins of a pixel's cost: twice the spacing of the
+// default 1000 directions, and narrower than the broadest lobe offered (30°).
+constexpr double kOtherBasinDeg = 10;
 
 // One thread's search: buffers are reused from pixel to pixel.
 class NormalSearch {
