@@ -254,20 +254,29 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
           continue;
         }
         if (per_pixel) {
-          // Each model searched on all lights, then on each half near that answer.
-          const SearchResult l = lambert_search->Search(fitter.luminance(), fitter.usable(),
-                                                        fitter.threshold(), nullptr);
-          const HeldOutResult lambert =
-              HeldOutSearch(*lambert_search, *lambert_table, fitter.luminance(), fitter.usable(),
-                            fold.data(), fitter.threshold(), buffer, true);
-          // The specular search above was the last full one of `search`.
-          const HeldOutResult specular =
-              HeldOutSearch(search, table, fitter.luminance(), fitter.usable(), fold.data(),
-                            fitter.threshold(), buffer, true);
-          won[p] = lambert.cost <= specular.cost && l.candidate >= 0 ? 0 : 1;
-          if (won[p] == 0) {
+          // Where the object's lobe gets no weight in the pixel's fit to all its lights the two
+          // models are the same there: Lambert, untested. Otherwise each model is searched on
+          // each fold's training lights near the all-lights answer (the tables share their
+          // directions, and the two models' answers for a pixel lie near each other: searching
+          // Lambert's own on all lights as well cost a fifth of the run, and leaving it out moved
+          // the seven DiLiGenT runs by 0.01° at most, harvest by −0.13°), and the held-out costs
+          // decide.
+          bool lambert_wins = r.ks == 0;
+          if (!lambert_wins) {
+            lambert_search->NearTheLastOf(search);
+            const HeldOutResult lambert =
+                HeldOutSearch(*lambert_search, *lambert_table, fitter.luminance(), fitter.usable(),
+                              fold.data(), fitter.threshold(), buffer, true);
+            // The specular search above was the last full one of `search`.
+            const HeldOutResult specular =
+                HeldOutSearch(search, table, fitter.luminance(), fitter.usable(), fold.data(),
+                              fitter.threshold(), buffer, true);
+            lambert_wins = lambert.cost <= specular.cost;
+          }
+          won[p] = lambert_wins ? 0 : 1;
+          if (lambert_wins) {
             lambert_fitter->Prepare(p);
-            s.normal = lambert_table->normal(l.candidate);
+            s.normal = table.normal(r.candidate);
             lambert_fitter->Fit(s);
             local += s.iterations;
             continue;

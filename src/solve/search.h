@@ -89,6 +89,9 @@ class NormalSearch {
   // near the one all lights found), at a fifth of the cost.
   SearchResult Search(const double* y, const double* usable, double t, const double* fixed_ks,
                       bool near_last = false);
+  // The coarse directions the next `near_last` search looks near: those of `other`'s last full
+  // search (a table over the same directions).
+  void NearTheLastOf(const NormalSearch& other) { last_coarse_ = other.last_coarse_; }
 
  private:
   // Refits candidate c's coefficients with the censoring weights of (kd, ks), in place, and
