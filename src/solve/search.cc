@@ -165,7 +165,12 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
     // From the screening's least-squares coefficients, two rounds of the censoring's weights.
     for (int round = 0; round < 2; ++round) s.cost = Refit(s.candidate, t, fixed_ks, &s.kd, &s.ks);
   }
-  std::stable_sort(scores_.begin(), scores_.begin() + top);  // ties keep their screening order
+  // Insertion sort: stable (ties keep their screening order), and no buffer per search as
+  // std::stable_sort takes; `top` is at most `refine` (16).
+  for (int i = 1; i < top; ++i) {
+    for (int j = i; j > 0 && scores_[j].cost < scores_[j - 1].cost; --j)
+      std::swap(scores_[j], scores_[j - 1]);
+  }
   SearchResult best;
   if (top == 0) return best;
   best = {scores_[0].candidate, scores_[0].cost, scores_[0].kd, scores_[0].ks, {-1, -1}};
