@@ -200,10 +200,11 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
     }
     reflectance::ModelOptions model;
     model.lobe = o.model;
-    const CandidateTable table(data.light_directions, model, o.shininess, o.search_candidates);
-    const WoodhamSettings woodham = WoodhamOf(o);
     // The per-pixel choice between Lambert and the object's model, on the choice's halves.
     const std::vector<int>& fold = plan.model_choice.fold;
+    const CandidateTable table(data.light_directions, model, o.shininess, o.search_candidates,
+                               fold);
+    const WoodhamSettings woodham = WoodhamOf(o);
     const bool per_pixel = !o.material_known && o.per_pixel_model &&
                            o.model != reflectance::Lobe::kLambert && !fold.empty();
     std::optional<CandidateTable> lambert_table;
@@ -215,7 +216,7 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
     if (per_pixel) {
       reflectance::ModelOptions lambert;
       lambert.lobe = reflectance::Lobe::kLambert;
-      lambert_table.emplace(data.light_directions, lambert, 1.0, o.search_candidates);
+      lambert_table.emplace(data.light_directions, lambert, 1.0, o.search_candidates, fold);
     }
     std::atomic<std::size_t> done{0};
     std::atomic<long long> iterations{0};

@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "solve/internal.h"
 
@@ -26,9 +27,11 @@ std::vector<Vec3d> HemisphereDirections(int count) {
 }
 
 CandidateTable::CandidateTable(const std::vector<Vec3d>& light_dir_cam,
-                               const reflectance::ModelOptions& model, double shininess, int count)
+                               const reflectance::ModelOptions& model, double shininess, int count,
+                               const std::vector<int>& fold)
     : lights_(static_cast<int>(light_dir_cam.size())),
       fine_(count),
+      fold_(fold),
       normals_(HemisphereDirections(count)) {
   const std::vector<Vec3d> coarse = HemisphereDirections(std::max(4, count / 4));
   normals_.insert(normals_.end(), coarse.begin(), coarse.end());
@@ -69,6 +72,22 @@ CandidateTable::CandidateTable(const std::vector<Vec3d>& light_dir_cam,
     sums_[3 * c + 1] = ds;
     sums_[3 * c + 2] = ss;
   }
+  if (fold_.size() != k) {
+    fold_.clear();
+    return;
+  }
+  const int folds = fold_.empty() ? 0 : 1 + *std::max_element(fold_.begin(), fold_.end());
+  fold_sums_.assign(folds, std::vector<double>(sums_.size(), 0.0));
+  for (int f = 0; f < folds; ++f) {
+    for (std::size_t c = 0; c < normals_.size(); ++c) {
+      double* out = &fold_sums_[f][3 * c];
+      for (std::size_t j = 0; j < k; ++j) {
+        if (fold_[j] == f) continue;
+        const double d = diffuse_[c * k + j], s = specular_[c * k + j];
+        out[0] += d * d, out[1] += d * s, out[2] += s * s;
+      }
+    }
+  }
 }
 
 std::pair<double, double> NormalSearch::Solve(double d, double x, double s, double a, double b,
@@ -89,6 +108,7 @@ NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optiona
   y_.resize(table.lights());
   usable_.resize(table.lights());
   weight_.resize(table.lights());
+  next_weight_.resize(table.lights());
   scores_.reserve(table.size());
 }
 
@@ -104,17 +124,27 @@ double NormalSearch::Cost(int c, double t, double kd, double ks) const {
       .sum();
 }
 
-double NormalSearch::Refit(int c, double t, const double* fixed_ks, double* kd, double* ks) {
+bool NormalSearch::Refit(int c, double t, const double* fixed_ks, int round, double* kd, double* ks,
+                         double* cost) {
   const int k = table_.lights();
   const VecF d(table_.diffuse(c), k), s(table_.specular(c), k), y(y_.data(), k),
       u(usable_.data(), k);
-  // The censoring's weights into the member buffers (no allocation per candidate).
-  weight_.resize(k);
-  Eigen::Map<Eigen::ArrayXf> w(weight_.data(), k);
-  w = ((y.array() - static_cast<float>(*kd) * d.array() - static_cast<float>(*ks) * s.array()) >=
-       static_cast<float>(-t))
-          .cast<float>() *
-      u.array();
+  // The censoring's weights into the member buffers (no allocation per candidate). A plain loop:
+  // Eigen evaluates a comparison cast to float one value at a time, the compiler vectorizes this.
+  const float fkd = static_cast<float>(*kd), fks = static_cast<float>(*ks);
+  const float floor = static_cast<float>(-t);
+  const float *dp = table_.diffuse(c), *sp = table_.specular(c);
+  for (int j = 0; j < k; ++j) {
+    const float r = y_[j] - fkd * dp[j] - fks * sp[j];
+    next_weight_[j] = r >= floor ? usable_[j] : 0.0f;
+  }
+  // The same observations censored as in this candidate's last round: the same fit. (Weights
+  // are exactly 0 or 1, so their bytes compare.)
+  if (round > 0 && std::memcmp(next_weight_.data(), weight_.data(), k * sizeof(float)) == 0) {
+    return false;
+  }
+  std::swap(weight_, next_weight_);
+  const Eigen::Map<const Eigen::ArrayXf> w(weight_.data(), k);
   const auto wd = w * d.array();
   const auto ws = w * s.array();
   const auto [new_kd, new_ks] =
@@ -122,25 +152,51 @@ double NormalSearch::Refit(int c, double t, const double* fixed_ks, double* kd, 
             (wd * y.array()).sum(), (ws * y.array()).sum(), fixed_ks);
   *kd = new_kd;
   *ks = new_ks;
-  return Cost(c, t, new_kd, new_ks);
+  *cost = Cost(c, t, new_kd, new_ks);
+  return true;
 }
 
 SearchResult NormalSearch::Search(const double* y, const double* usable, double t,
                                   const double* fixed_ks, bool near_last) {
   const int k = table_.lights();
-  bool all_usable = true;
   for (int j = 0; j < k; ++j) {
     y_[j] = static_cast<float>(y[j]);
     usable_[j] = usable[j] != 0 ? 1.0f : 0.0f;
-    all_usable = all_usable && usable_[j] == 1;
+  }
+  // The sums Σ d², Σ d s, Σ s² over the usable lights: the table's over every light or over a
+  // fold's training lights — whichever holds them all and the fewest others — less those few
+  // others' terms (saturated observations, mostly); summed directly only when more than a
+  // quarter of the base would be left out.
+  const std::vector<int>& fold = table_.fold();
+  int base = -1;
+  std::size_t fewest = static_cast<std::size_t>(k) + 1;
+  for (int b = -1; b < table_.folds(); ++b) {
+    std::size_t left_out = 0;
+    bool holds = true;
+    for (int j = 0; j < k && holds; ++j) {
+      const bool in_base = b < 0 || fold[j] != b;
+      holds = in_base || usable_[j] == 0;
+      left_out += in_base && usable_[j] == 0;
+    }
+    if (holds && left_out < fewest) base = b, fewest = left_out;
+  }
+  const bool from_table = 4 * fewest <= static_cast<std::size_t>(k);
+  excluded_.clear();
+  for (int j = 0; j < k && from_table; ++j) {
+    if ((base < 0 || fold[j] != base) && usable_[j] == 0) excluded_.push_back(j);
   }
   const VecF yv(y_.data(), k), u(usable_.data(), k);
   const Eigen::VectorXf yu = yv.cwiseProduct(u);
   const auto score = [&](int c) {
     const VecF d(table_.diffuse(c), k), s(table_.specular(c), k);
     double sd, sx, sss;
-    if (all_usable) {
-      sd = table_.dd(c), sx = table_.ds(c), sss = table_.ss(c);
+    if (from_table) {
+      const double* sums = table_.base_sums(base, c);
+      sd = sums[0], sx = sums[1], sss = sums[2];
+      for (const int j : excluded_) {
+        const double dj = d[j], sj = s[j];
+        sd -= dj * dj, sx -= dj * sj, sss -= sj * sj;
+      }
     } else {
       sd = d.cwiseProduct(u).dot(d), sx = d.cwiseProduct(u).dot(s), sss = s.cwiseProduct(u).dot(s);
     }
@@ -151,7 +207,9 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
   if (!near_last) {
     for (int c = table_.fine_count(); c < table_.size(); ++c) scores_.push_back(score(c));
     const int coarse_top = std::min<int>(12, static_cast<int>(scores_.size()));
-    std::partial_sort(scores_.begin(), scores_.begin() + coarse_top, scores_.end());
+    // The best 12, in order: selection then a sort of those few (a heap over all was 5 % of a run).
+    std::nth_element(scores_.begin(), scores_.begin() + coarse_top - 1, scores_.end());
+    std::sort(scores_.begin(), scores_.begin() + coarse_top);
     last_coarse_.clear();
     for (int i = 0; i < coarse_top; ++i) last_coarse_.push_back(scores_[i].candidate);
   }
@@ -159,11 +217,17 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
     for (int f : table_.members(c)) scores_.push_back(score(f));
   }
   const int top = std::min<int>(refine_, static_cast<int>(scores_.size()));
-  std::partial_sort(scores_.begin(), scores_.begin() + top, scores_.end());
+  if (top > 0) {
+    std::nth_element(scores_.begin(), scores_.begin() + top - 1, scores_.end());
+    std::sort(scores_.begin(), scores_.begin() + top);
+  }
   for (int i = 0; i < top; ++i) {
     Scored& s = scores_[i];
-    // From the screening's least-squares coefficients, two rounds of the censoring's weights.
-    for (int round = 0; round < 2; ++round) s.cost = Refit(s.candidate, t, fixed_ks, &s.kd, &s.ks);
+    // From the screening's least-squares coefficients, two rounds of the censoring's weights
+    // (the second only when the first changed which observations are censored).
+    for (int round = 0; round < 2; ++round) {
+      if (!Refit(s.candidate, t, fixed_ks, round, &s.kd, &s.ks, &s.cost)) break;
+    }
   }
   // Insertion sort: stable (ties keep their screening order), and no buffer per search as
   // std::stable_sort takes; `top` is at most `refine` (16).

@@ -32,8 +32,10 @@ std::vector<Vec3d> HemisphereDirections(int count);
 // Candidates 0 … fine_count() − 1 are the fine directions, the rest the coarse ones.
 class CandidateTable {
  public:
+  // With `fold` (each light's cross-validation fold, or empty) the sums over each fold's
+  // training lights are kept too, so a search on them costs what one on every light does.
   CandidateTable(const std::vector<Vec3d>& light_dir_cam, const reflectance::ModelOptions& model,
-                 double shininess, int count);
+                 double shininess, int count, const std::vector<int>& fold = {});
   int size() const { return static_cast<int>(normals_.size()); }
   int fine_count() const { return fine_; }
   // The fine candidates whose nearest coarse direction is coarse candidate c.
@@ -46,14 +48,19 @@ class CandidateTable {
   const float* specular(int c) const {
     return specular_.data() + static_cast<std::size_t>(c) * lights_;
   }
-  // Σ_j d², Σ_j d s, Σ_j s² over every light: the sums of a pixel with no saturated image.
-  double dd(int c) const { return sums_[3 * c]; }
-  double ds(int c) const { return sums_[3 * c + 1]; }
-  double ss(int c) const { return sums_[3 * c + 2]; }
+  // The folds given (empty: none), and {Σ d², Σ d s, Σ s²} of candidate c over every light
+  // (base −1: the sums of a pixel with no saturated image) or over those outside fold `base`.
+  const std::vector<int>& fold() const { return fold_; }
+  int folds() const { return static_cast<int>(fold_sums_.size()); }
+  const double* base_sums(int base, int c) const {
+    return (base < 0 ? sums_.data() : fold_sums_[base].data()) + 3 * static_cast<std::size_t>(c);
+  }
 
  private:
   int lights_ = 0;
   int fine_ = 0;
+  std::vector<int> fold_;
+  std::vector<std::vector<double>> fold_sums_;
   std::vector<Vec3d> normals_;
   std::vector<std::vector<int>> members_;
   std::vector<float> diffuse_, specular_;
@@ -95,8 +102,10 @@ class NormalSearch {
 
  private:
   // Refits candidate c's coefficients with the censoring weights of (kd, ks), in place, and
-  // returns the censored cost of the result.
-  double Refit(int c, double t, const double* fixed_ks, double* kd, double* ks);
+  // sets the censored cost of the result; false (nothing changed) when a round after the first
+  // censors what the one before it did.
+  bool Refit(int c, double t, const double* fixed_ks, int round, double* kd, double* ks,
+             double* cost);
   // (kd, ks) from the weighted sums (internal::NonNegativePair, or kd alone for a fixed ks).
   std::pair<double, double> Solve(double d, double x, double s, double a, double b,
                                   const double* fixed_ks) const;
@@ -105,7 +114,7 @@ class NormalSearch {
   int refine_;
   std::optional<double> ks_prior_;
   double prior_weight_ = 0;
-  std::vector<float> y_, usable_, weight_;
+  std::vector<float> y_, usable_, weight_, next_weight_;
   struct Scored {
     double cost;
     int candidate;
@@ -114,6 +123,7 @@ class NormalSearch {
   };
   std::vector<Scored> scores_;
   std::vector<int> last_coarse_;
+  std::vector<int> excluded_;  // lights of the sums' base that the search leaves out
 };
 
 // One pixel's held-out cost under a model, by cross-validation over the lights: for each fold f
