@@ -54,7 +54,7 @@ int FoldCount(int lights);
 
 struct ModelChoiceSettings {
   PixelFitSettings fit;  // saturation, shadow threshold and ambient term of the observations
-  int sample = 300;      // pixels scored
+  int sample = 600;      // pixels scored (NormalOptions::model_sample)
   int search_candidates = 1000;
   int threads = 0;
 };

@@ -117,6 +117,7 @@ struct PixelFitter::State {
   std::vector<reflectance::LightFactors<double>> values;
   std::vector<double> y_rgb, y_lum, usable, weights, residuals, bright;
   const float* obs = nullptr;
+  Vec3d fitted_albedo = Vec3d::Zero(), fitted_specular = Vec3d::Zero();  // the last Fit's
   double threshold = 0;
   bool dark = false;
 
@@ -237,9 +238,15 @@ bool PixelFitter::Prepare(std::size_t p) {
   return true;
 }
 
-void PixelFitter::Fit(internal::PixelSolution& s) {
+void PixelFitter::Fit(internal::PixelSolution& s, const double* lights) {
   State& st = *state_;
   const int k = st.data.images;
+  // The lights left out are unusable for this fit only.
+  std::vector<double> all_usable;
+  if (lights) {
+    all_usable = st.usable;
+    for (int j = 0; j < k; ++j) st.usable[j] *= lights[j] != 0 ? 1.0 : 0.0;
+  }
   st.weights = st.usable;
   st.model.Center(s.normal);
   Eigen::Vector2d x = Eigen::Vector2d::Zero();
@@ -296,6 +303,15 @@ void PixelFitter::Fit(internal::PixelSolution& s) {
   }
   s.residual = std::sqrt(sq / std::max(used, 1));
   s.cost = cost;
+  st.fitted_albedo = s.albedo;
+  st.fitted_specular = s.specular;
+  if (lights) st.usable = std::move(all_usable);
+}
+
+double PixelFitter::Predicted(int j) const {
+  const State& st = *state_;
+  return internal::Luminance(reflectance::CombineFactors<double>(
+      st.values[j], Vec3d::Ones(), Vec3d::Ones(), st.fitted_albedo, st.fitted_specular));
 }
 
 }  // namespace iphong::solve

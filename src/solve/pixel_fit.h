@@ -56,8 +56,13 @@ class PixelFitter {
   double threshold() const;
 
   // Refines s.normal (unit, the start) in place and sets the albedo, ks, residual (RMS of the
-  // usable observations against the model, in image units) and iterations.
-  void Fit(internal::PixelSolution& s);
+  // usable observations against the model, in image units) and iterations. With `lights` (K
+  // weights, 0 or 1) only the lights where it is 1 are fitted: a cross-validation fold's
+  // training lights.
+  void Fit(internal::PixelSolution& s, const double* lights = nullptr);
+  // After Fit: the luminance the fitted model predicts for light j (any light, fitted or not),
+  // in the units of luminance().
+  double Predicted(int j) const;
 
  private:
   struct State;
