@@ -44,6 +44,42 @@ namespace {
 // Censoring rounds of each fold's local fit: the start's censoring and one revision of it.
 constexpr int kHeldOutFitRounds = 2;
 
+// One pixel's held-out cost under a model, by cross-validation over the lights (fold[j] in
+// 0 … F − 1): for each fold the global search on the lights outside it, refined by `fitter`'s
+// local fit on the same lights (a luminance fitter of the model, Prepared for the pixel), charged
+// the censored cost of the fold's own usable observations in units of t². normal[0] and
+// normal[1] are the first two folds' normals (zero: none).
+struct RefinedHeldOut {
+  double cost = 0;
+  Vec3d normal[2] = {Vec3d::Zero(), Vec3d::Zero()};
+};
+
+RefinedHeldOut RefinedHeldOutCost(NormalSearch& search, const CandidateTable& table,
+                                  PixelFitter& fitter, const int* fold,
+                                  std::vector<double>& training) {
+  const int k = table.lights();
+  const int folds = 1 + *std::max_element(fold, fold + k);
+  const double* y = fitter.luminance();
+  const double* usable = fitter.usable();
+  const double t = fitter.threshold();
+  training.resize(k);
+  RefinedHeldOut out;
+  for (int f = 0; f < folds; ++f) {
+    for (int j = 0; j < k; ++j) training[j] = fold[j] == f ? 0.0 : usable[j];
+    const SearchResult r = search.Search(y, training.data(), t, nullptr);
+    if (r.candidate < 0) continue;
+    internal::PixelSolution solution;
+    solution.normal = table.normal(r.candidate);
+    fitter.Fit(solution, training.data());
+    if (f < 2) out.normal[f] = solution.normal;
+    for (int j = 0; j < k; ++j) {
+      if (fold[j] != f || usable[j] == 0) continue;
+      out.cost += internal::CensoredCost(y[j] - fitter.Predicted(j), t) / (t * t);
+    }
+  }
+  return out;
+}
+
 struct Sample {
   std::size_t pixel = 0;
   std::vector<double> y, usable;  // K each
@@ -71,8 +107,6 @@ std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
   if (m.ks_prior_weight > 0) fit.ks_prior = m.ks_prior, fit.ks_prior_weight = m.ks_prior_weight;
   fit.color_residuals = false;  // the search's luminance
   fit.rounds = kHeldOutFitRounds;
-  const int k = data.images;
-  const int folds = 1 + *std::max_element(fold.begin(), fold.end());
   std::vector<double> cost(sample.size(), 0.0), angle(sample.size(), 0.0);
   ParallelFor(0, sample.size(), 16, settings.threads, [&](std::size_t b, std::size_t e) {
     NormalSearch search(
@@ -80,27 +114,14 @@ std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
         m.ks_prior_weight > 0 ? std::optional(internal::Luminance(m.ks_prior)) : std::nullopt,
         m.ks_prior_weight);
     PixelFitter fitter(data, fit);
-    std::vector<double> training(k);
+    std::vector<double> training;
     for (std::size_t i = b; i < e; ++i) {
       const Sample& s = sample[i];
       if (!fitter.Prepare(s.pixel)) continue;  // the sample was drawn where it succeeds
-      Vec3d normal[2] = {Vec3d::Zero(), Vec3d::Zero()};
-      for (int f = 0; f < folds; ++f) {
-        for (int j = 0; j < k; ++j) training[j] = fold[j] == f ? 0.0 : s.usable[j];
-        const SearchResult r = search.Search(s.y.data(), training.data(), s.threshold, nullptr);
-        if (r.candidate < 0) continue;
-        internal::PixelSolution solution;
-        solution.normal = table.normal(r.candidate);
-        fitter.Fit(solution, training.data());
-        if (f < 2) normal[f] = solution.normal;
-        for (int j = 0; j < k; ++j) {
-          if (fold[j] != f || s.usable[j] == 0) continue;
-          cost[i] += internal::CensoredCost(s.y[j] - fitter.Predicted(j), s.threshold) /
-                     (s.threshold * s.threshold);
-        }
-      }
-      if (!normal[0].isZero() && !normal[1].isZero()) {
-        angle[i] = std::acos(std::clamp(normal[0].dot(normal[1]), -1.0, 1.0)) * 180 / M_PI;
+      const RefinedHeldOut r = RefinedHeldOutCost(search, table, fitter, fold.data(), training);
+      cost[i] = r.cost;
+      if (!r.normal[0].isZero() && !r.normal[1].isZero()) {
+        angle[i] = std::acos(std::clamp(r.normal[0].dot(r.normal[1]), -1.0, 1.0)) * 180 / M_PI;
       }
     }
   });

@@ -305,7 +305,8 @@ void PixelFitter::Fit(internal::PixelSolution& s, const double* lights) {
   s.cost = cost;
   st.fitted_albedo = s.albedo;
   st.fitted_specular = s.specular;
-  if (lights) st.usable = std::move(all_usable);
+  // Copied back, not moved: usable() hands out this buffer.
+  if (lights) std::copy(all_usable.begin(), all_usable.end(), st.usable.begin());
 }
 
 double PixelFitter::Predicted(int j) const {
