@@ -52,6 +52,12 @@ constexpr int kMinTrainingLights = 24;
 // least 2; K (leave-one-out) for K ≤ kMinTrainingLights.
 int FoldCount(int lights);
 
+// `count` indices of 0 … n − 1 (all of them if n ≤ count), ascending, spread without a period:
+// the golden-ratio sequence. The sample the choice scores, from the pixels in raster order: an
+// even stride there can be a multiple of the row width (a whole-frame 240×240 capture sampled
+// 600 pixels from 5 columns).
+std::vector<std::size_t> SpreadIndices(std::size_t n, int count);
+
 struct ModelChoiceSettings {
   PixelFitSettings fit;  // saturation, shadow threshold and ambient term of the observations
   int sample = 600;      // pixels scored (NormalOptions::model_sample)

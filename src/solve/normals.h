@@ -47,10 +47,10 @@ struct NormalOptions {
   // the narrowest lobe the choice offers is wide.
   int search_candidates = 1000;
   // Pixels the model choice scores. Its decisions are paired differences of held-out costs
-  // whose standard error falls as 1/√sample: on the seven DiLiGenT runs 300 left ball's lobe to a
-  // coin toss (Blinn-Phong 753 or Phong 201: 1.90° or 2.07°), 600 and 1000 gave means of 6.16°
-  // and 6.17° against 6.25° at 300 (the model choice on full-resolution cat: 1.3 s at 600,
-  // 2.1 s at 1000).
+  // whose standard error falls as 1/√sample: on the seven DiLiGenT runs (an even stride then)
+  // 300 left ball's lobe to a coin toss (Blinn-Phong 753 or Phong 201: 1.90° or 2.07°), 600 and
+  // 1000 gave means of 6.16° and 6.17° against 6.25° at 300 (the model choice on
+  // full-resolution cat: 1.3 s at 600, 2.1 s at 1000).
   int model_sample = 600;
   // Pixels the whole-object decisions see (PlanSampleIndices): the model choice scores
   // model_sample of them and the ambient estimate is a quartile over them, so 2^17 costs nothing

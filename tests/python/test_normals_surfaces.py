@@ -103,7 +103,7 @@ def test_unknown_coefficients_with_noise(name):
 @pytest.mark.parametrize("name", ["peaks", "torus", "dome"])
 def test_unknown_shininess_comes_back_from_an_independent_renderer(name):
     # The model choice predicts held-out lights from refined normals, so the lobe and shininess of
-    # a render it did not make come back: measured 24.2, 24.2 and 23.6 for 24 (mean 0.014-0.021
+    # a render it did not make come back: measured 24.2, 24.2 and 23.6 for 24 (mean 0.013-0.025
     # deg); from the search grid's normals it was 25.1, 22.7 and Blinn-Phong 92.4 (0.05-0.06 deg).
     images, directions, intensities, mask, truth = render(name)
     r = iphong.estimate_normals(images, directions, intensities, mask)
