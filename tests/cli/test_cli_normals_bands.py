@@ -91,3 +91,20 @@ def test_refusals_write_nothing(captures, tmp_path):
     image.write_bytes(image.read_bytes()[: image.stat().st_size * 2 // 3])
     assert_refused(tmp_path, ["normals", tmp_path / "ds", "-o", out, "--band-rows", "8"], 1,
                    r"007\.png: cannot decode rows \d+\.\.\d+", names=image)
+
+
+def test_one_image_is_refused_when_its_global_solve_would_not_fit(captures, tmp_path):
+    """One or two images are solved whole, at about 4 KB a masked pixel: the estimate counts it,
+    so a limit that holds the capture but not the solve is exit 3 with the figure, not a run that
+    outgrows it (a 12-megapixel photo would need some 45 GB). The sphere's 5 700 pixels need
+    about 23 MB more than the capture's 203 MB."""
+    ds = tmp_path / "ds"
+    shutil.copytree(captures / "png", ds)
+    (ds / ".iphong-manifest.json").unlink()
+    (ds / "filenames.txt").write_text("001.png\n")
+    for name in ("light_directions.txt", "light_intensities.txt"):
+        (ds / name).write_text((ds / name).read_text().splitlines()[0] + "\n")
+    assert_refused(tmp_path, ["normals", ds, "-o", tmp_path / "out", "--memory-limit", "0.215"], 3,
+                   r"x 1 images would need 2[23]\d MB whole\): one or two images are solved whole")
+    code, _, err = run("normals", ds, "-o", tmp_path / "out", "-q", "--memory-limit", "0.25")
+    assert code == 0, err
