@@ -84,8 +84,9 @@ def test_real_ball_beats_woodham():
     woodham = iphong.angular_error(iphong.estimate_normals(*args, model="lambert", discard_dark=0,
                                                            discard_bright=0)["normals"],
                                    d["normal_gt"], d["mask"])
-    # 2.61 against Woodham's 4.48 (README's accuracy table; --model lambert's discards give 2.48).
-    assert phong["mean_angular_error_deg"] < 2.7 < 4.0 < woodham["mean_angular_error_deg"]
+    # 1.90 against Woodham's 4.48 (README's accuracy table; --model lambert's discards give 2.48):
+    # the crop's truncated 8-bit codes read at their middle (2.61 as recorded).
+    assert phong["mean_angular_error_deg"] < 2.0 < 4.0 < woodham["mean_angular_error_deg"]
 
 
 def test_two_images_use_the_global_solver_with_priors():
