@@ -168,6 +168,19 @@ NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& optio
 NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan& plan) {
   const NormalOptions& o = plan.options;
   CheckInputs(data, o);
+  // A plan can come from elsewhere (Python, a Dask worker): its folds index the lights, and their
+  // count sizes the search's tables, so they are checked before anything is read or allocated.
+  if (const std::vector<int>& fold = plan.model_choice.fold; !fold.empty()) {
+    const int folds = FoldCount(data.images);
+    const bool fits =
+        static_cast<int>(fold.size()) == data.images &&
+        std::all_of(fold.begin(), fold.end(), [&](int f) { return f >= 0 && f < folds; });
+    if (!fits) {
+      throw std::invalid_argument("plan: fold must give each of the " +
+                                  std::to_string(data.images) + " lights a fold in 0.." +
+                                  std::to_string(folds - 1) + " (a plan for other lights?)");
+    }
+  }
   const std::size_t pixels = data.pixel_count();
   std::vector<PixelSolution> solutions(pixels);
   NormalResult result;

@@ -84,6 +84,20 @@ def test_bad_arrays_raise_value_error(capture):
     with pytest.raises(ValueError, match="plan: not a plan"):
         iphong.solve_normals_block(capture["images"], None, capture["light_directions"],
                                    plan={"options": {}})
+    # A plan's folds index the lights and size the search's tables: a plan for other lights, or
+    # edited, is one line, not a read past the lights or a table of a billion folds.
+    mask = np.asarray(capture["mask"], bool)
+    positions = np.flatnonzero(mask)
+    sample = np.ascontiguousarray(np.asarray(capture["images"])[:, mask].transpose(1, 0, 2))
+    plan = iphong.plan_normals(sample, positions, mask.shape[1], mask.shape[0],
+                               capture["light_directions"], capture["light_intensities"])
+    assert len(plan["fold"]) == 30
+    for fold in (plan["fold"][:-1], [10**9] * len(plan["fold"]), [-1] * len(plan["fold"])):
+        edited = dict(plan, fold=fold)
+        with pytest.raises(ValueError, match="plan: fold must give each of the 30 lights"):
+            iphong.solve_normals_block(capture["images"], capture["mask"],
+                                       capture["light_directions"], capture["light_intensities"],
+                                       plan=edited)
 
 
 def test_distributed_cluster_equals_the_whole(capture, whole):
