@@ -44,41 +44,22 @@ namespace {
 // Censoring rounds of each fold's local fit: the start's censoring and one revision of it.
 constexpr int kHeldOutFitRounds = 2;
 
-// One pixel's held-out cost under a model, by cross-validation over the lights (fold[j] in
-// 0 … F − 1): for each fold the global search on the lights outside it, refined by `fitter`'s
-// local fit on the same lights (a luminance fitter of the model, Prepared for the pixel), charged
-// the censored cost of the fold's own usable observations in units of t². normal[0] and
-// normal[1] are the first two folds' normals (zero: none).
-struct RefinedHeldOut {
-  double cost = 0;
-  Vec3d normal[2] = {Vec3d::Zero(), Vec3d::Zero()};
-};
-
-RefinedHeldOut RefinedHeldOutCost(NormalSearch& search, const CandidateTable& table,
-                                  PixelFitter& fitter, const int* fold,
-                                  std::vector<double>& training) {
-  const int k = table.lights();
-  const int folds = 1 + *std::max_element(fold, fold + k);
-  const double* y = fitter.luminance();
-  const double* usable = fitter.usable();
-  const double t = fitter.threshold();
-  training.resize(k);
-  RefinedHeldOut out;
-  for (int f = 0; f < folds; ++f) {
-    for (int j = 0; j < k; ++j) training[j] = fold[j] == f ? 0.0 : usable[j];
-    const SearchResult r = search.Search(y, training.data(), t, nullptr);
-    if (r.candidate < 0) continue;
+// The model choice's held-out fits: each fold's search winner refined by the local fit on the
+// fold's training lights (luminance), which then predicts the fold.
+class LocalFitRefiner : public HeldOutRefiner {
+ public:
+  explicit LocalFitRefiner(PixelFitter& fitter) : fitter_(fitter) {}
+  Vec3d Refine(const Vec3d& start, const double* training) override {
     internal::PixelSolution solution;
-    solution.normal = table.normal(r.candidate);
-    fitter.Fit(solution, training.data());
-    if (f < 2) out.normal[f] = solution.normal;
-    for (int j = 0; j < k; ++j) {
-      if (fold[j] != f || usable[j] == 0) continue;
-      out.cost += internal::CensoredCost(y[j] - fitter.Predicted(j), t) / (t * t);
-    }
+    solution.normal = start;
+    fitter_.Fit(solution, training);
+    return solution.normal;
   }
-  return out;
-}
+  double Predicted(int j) const override { return fitter_.Predicted(j); }
+
+ private:
+  PixelFitter& fitter_;
+};
 
 struct Sample {
   std::size_t pixel = 0;
@@ -114,11 +95,14 @@ std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
         m.ks_prior_weight > 0 ? std::optional(internal::Luminance(m.ks_prior)) : std::nullopt,
         m.ks_prior_weight);
     PixelFitter fitter(data, fit);
-    std::vector<double> training;
+    LocalFitRefiner refiner(fitter);
+    std::vector<double> buffer;
     for (std::size_t i = b; i < e; ++i) {
       const Sample& s = sample[i];
       if (!fitter.Prepare(s.pixel)) continue;  // the sample was drawn where it succeeds
-      const RefinedHeldOut r = RefinedHeldOutCost(search, table, fitter, fold.data(), training);
+      const HeldOutResult r =
+          HeldOutSearch(search, table, fitter.luminance(), fitter.usable(), fold.data(),
+                        fitter.threshold(), buffer, false, &refiner);
       cost[i] = r.cost;
       if (!r.normal[0].isZero() && !r.normal[1].isZero()) {
         angle[i] = std::acos(std::clamp(r.normal[0].dot(r.normal[1]), -1.0, 1.0)) * 180 / M_PI;

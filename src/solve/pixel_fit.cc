@@ -116,6 +116,7 @@ struct PixelFitter::State {
   Factors factors, trial;  // at the current point and the trial step (swapped)
   std::vector<reflectance::LightFactors<double>> values;
   std::vector<double> y_rgb, y_lum, usable, weights, residuals, bright;
+  std::vector<double> saved_usable;  // usable outside a fold's fit
   const float* obs = nullptr;
   Vec3d fitted_albedo = Vec3d::Zero(), fitted_specular = Vec3d::Zero();  // the last Fit's
   double threshold = 0;
@@ -241,10 +242,10 @@ bool PixelFitter::Prepare(std::size_t p) {
 void PixelFitter::Fit(internal::PixelSolution& s, const double* lights) {
   State& st = *state_;
   const int k = st.data.images;
-  // The lights left out are unusable for this fit only.
-  std::vector<double> all_usable;
+  // The lights left out are unusable for this fit only (kept in a member buffer: no allocation
+  // per fit).
   if (lights) {
-    all_usable = st.usable;
+    st.saved_usable.assign(st.usable.begin(), st.usable.end());
     for (int j = 0; j < k; ++j) st.usable[j] *= lights[j] != 0 ? 1.0 : 0.0;
   }
   st.weights = st.usable;
@@ -306,7 +307,7 @@ void PixelFitter::Fit(internal::PixelSolution& s, const double* lights) {
   st.fitted_albedo = s.albedo;
   st.fitted_specular = s.specular;
   // Copied back, not moved: usable() hands out this buffer.
-  if (lights) std::copy(all_usable.begin(), all_usable.end(), st.usable.begin());
+  if (lights) std::copy(st.saved_usable.begin(), st.saved_usable.end(), st.usable.begin());
 }
 
 double PixelFitter::Predicted(int j) const {

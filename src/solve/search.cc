@@ -127,15 +127,13 @@ double NormalSearch::Cost(int c, double t, double kd, double ks) const {
 bool NormalSearch::Refit(int c, double t, const double* fixed_ks, int round, double* kd, double* ks,
                          double* cost) {
   const int k = table_.lights();
-  const VecF d(table_.diffuse(c), k), s(table_.specular(c), k), y(y_.data(), k),
-      u(usable_.data(), k);
+  const VecF d(table_.diffuse(c), k), s(table_.specular(c), k), y(y_.data(), k);
   // The censoring's weights into the member buffers (no allocation per candidate). A plain loop:
   // Eigen evaluates a comparison cast to float one value at a time, the compiler vectorizes this.
   const float fkd = static_cast<float>(*kd), fks = static_cast<float>(*ks);
   const float floor = static_cast<float>(-t);
-  const float *dp = table_.diffuse(c), *sp = table_.specular(c);
   for (int j = 0; j < k; ++j) {
-    const float r = y_[j] - fkd * dp[j] - fks * sp[j];
+    const float r = y_[j] - fkd * d[j] - fks * s[j];
     next_weight_[j] = r >= floor ? usable_[j] : 0.0f;
   }
   // The same observations censored as in this candidate's last round: the same fit. (Weights
@@ -252,7 +250,7 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
 
 HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, const double* y,
                             const double* usable, const int* fold, double t,
-                            std::vector<double>& buffer, bool near_last) {
+                            std::vector<double>& buffer, bool near_last, HeldOutRefiner* refiner) {
   const int k = table.lights();
   const int folds = 1 + *std::max_element(fold, fold + k);
   buffer.resize(k);
@@ -261,13 +259,16 @@ HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, c
     // Fitted to every light but fold f's, charged for fold f's.
     for (int j = 0; j < k; ++j) buffer[j] = fold[j] == f ? 0.0 : usable[j];
     const SearchResult r = search.Search(y, buffer.data(), t, nullptr, near_last);
-    if (f < 2) out.candidate[f] = r.candidate;
     if (r.candidate < 0) continue;
+    const Vec3d normal = refiner ? refiner->Refine(table.normal(r.candidate), buffer.data())
+                                 : table.normal(r.candidate);
+    if (f < 2) out.normal[f] = normal;
     const float* d = table.diffuse(r.candidate);
     const float* s = table.specular(r.candidate);
     for (int j = 0; j < k; ++j) {
       if (fold[j] != f || usable[j] == 0) continue;
-      out.cost += internal::CensoredCost(y[j] - r.kd * d[j] - r.ks * s[j], t) / (t * t);
+      const double predicted = refiner ? refiner->Predicted(j) : r.kd * d[j] + r.ks * s[j];
+      out.cost += internal::CensoredCost(y[j] - predicted, t) / (t * t);
     }
   }
   return out;

@@ -126,17 +126,30 @@ class NormalSearch {
   std::vector<int> excluded_;  // lights of the sums' base that the search leaves out
 };
 
+// What a held-out fit does after the search on a fold's training lights: by default nothing (the
+// winning candidate predicts the fold); the model choice refines the normal by the local fit
+// (model_choice.cc), since a grid normal up to ~2° off penalizes sharp lobes for the grid alone.
+class HeldOutRefiner {
+ public:
+  virtual ~HeldOutRefiner() = default;
+  // The refined normal from the search's `start`, fitted to the lights where `training` is 1.
+  virtual Vec3d Refine(const Vec3d& start, const double* training) = 0;
+  // After Refine: the luminance the refined fit predicts for light j.
+  virtual double Predicted(int j) const = 0;
+};
+
 // One pixel's held-out cost under a model, by cross-validation over the lights: for each fold f
-// (fold[j] in 0 … F − 1) searched on the lights outside it and charged the censored cost of its
-// own usable observations, in units of t², summed over the folds. candidate[0] and candidate[1]
-// are the normals the first two fits chose (−1: none).
+// (fold[j] in 0 … F − 1) searched on the lights outside it (refined by `refiner` if given) and
+// charged the censored cost of its own usable observations, in units of t², summed over the
+// folds. normal[0] and normal[1] are the first two folds' normals (zero: none).
 struct HeldOutResult {
   double cost = 0;
-  int candidate[2] = {-1, -1};
+  Vec3d normal[2] = {Vec3d::Zero(), Vec3d::Zero()};
 };
 // `near_last`: the halves searched near the last full search of `search` (NormalSearch::Search).
 HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, const double* y,
                             const double* usable, const int* fold, double t,
-                            std::vector<double>& buffer, bool near_last = false);
+                            std::vector<double>& buffer, bool near_last = false,
+                            HeldOutRefiner* refiner = nullptr);
 
 }  // namespace iphong::solve
