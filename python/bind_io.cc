@@ -11,6 +11,7 @@
 #include "arrays.h"
 #include "bindings.h"
 #include "io/dataset.h"
+#include "io/dataset_write.h"
 #include "io/files.h"
 #include "io/image_io.h"
 #include "io/mesh_io.h"

@@ -12,6 +12,7 @@
 #include "geometry/primitives.h"
 #include "integrate/integrate.h"
 #include "io/dataset.h"
+#include "io/dataset_write.h"
 #include "io/image_io.h"
 #include "io/output_folder.h"
 #include "io/scene_file.h"

@@ -6,6 +6,7 @@
 
 #include "core/errors.h"
 #include "io/dataset.h"
+#include "io/dataset_write.h"
 #include "io/output_folder.h"
 #include "io/scene_file.h"
 #include "iphong/commands.h"

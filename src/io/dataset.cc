@@ -1,15 +1,9 @@
 #include "io/dataset.h"
 
-#include <fcntl.h>
-#include <matio.h>
-#include <unistd.h>
-
 #include <atomic>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 
 #include "core/errors.h"
@@ -21,8 +15,8 @@
 #include "io/dataset_text.h"
 #include "io/files.h"
 #include "io/json_reader.h"
+#include "io/normal_mat.h"
 #include "io/output_folder.h"
-#include "io/visualize.h"
 
 namespace iphong::io {
 namespace fs = std::filesystem;
@@ -47,76 +41,6 @@ ImageF ReadDatasetImage(const std::string& path, int width, int height,
   }));
 }
 
-ImageF MaskImage(const Mask& mask) {
-  ImageF image(mask.width, mask.height, 1);
-  for (std::size_t p = 0; p < mask.inside.size(); ++p) image.pixels[p] = mask.inside[p] ? 1.0f : 0;
-  return image;
-}
-
-nlohmann::json MaterialJson(const render::Scene& scene, const render::RenderOptions& options) {
-  const auto& first = scene.objects.front();
-  bool shared = true, kd_uniform = true;
-  for (const auto& o : scene.objects) {
-    shared = shared && o.material.ka == first.material.ka && o.material.ks == first.material.ks &&
-             o.material.shininess == first.material.shininess;
-    kd_uniform =
-        kd_uniform && o.material.kd == first.material.kd && o.albedo_texture.pixels.empty();
-  }
-  auto rgb = [](const Vec3d& v) { return nlohmann::json::array({v[0], v[1], v[2]}); };
-  nlohmann::json j;
-  j["model"] = reflectance::LobeName(options.model.lobe);
-  j["ambient"] = rgb(scene.lighting.ambient);
-  if (!shared) {
-    j["comment"] = "objects differ in ka, ks or shininess; these are the first object's";
-  }
-  j["ka"] = rgb(first.material.ka);
-  j["ks"] = rgb(first.material.ks);
-  j["shininess"] = first.material.shininess;
-  if (kd_uniform) j["kd"] = rgb(first.material.kd);
-  return j;
-}
-
-// A MAT-file (level 5) is a 128-byte header and then data elements, each an 8-byte tag (type,
-// byte count) and its bytes. matio reads a cut-off compressed element as zeros without a word, so
-// the elements are walked first: one that runs past the end of the file is an error.
-void CheckMat5Complete(const std::string& path) {
-  const std::uint64_t file_size = RequireRegularFile(path);
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) Fail(path, std::string("cannot open: ") + std::strerror(errno));
-  struct Close {
-    int fd;
-    ~Close() { ::close(fd); }
-  } closer{fd};
-  char header[128];
-  if (file_size < 128 || ::pread(fd, header, 128, 0) != 128) {
-    Fail(path, "too short for a MATLAB file (truncated?)");
-  }
-  if (std::string(header, 10) == "MATLAB 7.3") return;         // HDF5: its own checks apply
-  const bool swap = header[126] == 'M' && header[127] == 'I';  // written big-endian
-  auto word = [&](const unsigned char* b) {
-    std::uint32_t v = 0;
-    for (int k = 0; k < 4; ++k) v |= static_cast<std::uint32_t>(b[swap ? 3 - k : k]) << (8 * k);
-    return v;
-  };
-  for (std::uint64_t at = 128; at < file_size;) {
-    unsigned char tag[8];
-    if (at + 8 > file_size || ::pread(fd, tag, 8, static_cast<off_t>(at)) != 8) {
-      Fail(path, "ends inside a data element: truncated");
-    }
-    const std::uint32_t type = word(tag), count = word(tag + 4);
-    if (type >> 16 != 0) {  // small data element: type and count in one word, 4 bytes of data
-      at += 8;
-      continue;
-    }
-    // Uncompressed elements are padded to 8 bytes (the file's last one may end unpadded).
-    const std::uint64_t size = count;
-    if (at + 8 + size > file_size) {
-      Fail(path, "a data element runs past the end of the file: truncated");
-    }
-    at += 8 + (type == 15 ? size : (size + 7) / 8 * 8);
-  }
-}
-
 // Ground truth must be a map of unit normals (0 outside the object), not zeros or noise.
 void CheckNormalMap(const ImageF& normals, const std::string& path) {
   std::size_t unit = 0;
@@ -138,86 +62,6 @@ void CheckNormalMap(const ImageF& normals, const std::string& path) {
   if (unit == 0) Fail(path, "holds no normal (all zeros): empty or truncated");
 }
 
-}  // namespace
-
-void WriteNormalMat(const std::string& path, const std::string& variable, const ImageF& normals) {
-  const std::size_t h = normals.height, w = normals.width;
-  std::vector<double> data(h * w * 3);
-  for (std::size_t r = 0; r < h; ++r)
-    for (std::size_t c = 0; c < w; ++c)
-      for (std::size_t k = 0; k < 3; ++k)
-        data[r + h * (c + w * k)] = normals.pixels[3 * (r * w + c) + k];  // MATLAB: column-major
-  // matio writes only to paths and can report success on a full disk: the file is synced, then
-  // read back and compared value by value.
-  mat_t* mat = Mat_CreateVer(path.c_str(), nullptr, MAT_FT_MAT5);
-  if (mat == nullptr) throw OutputError(path + ": cannot write: cannot create the MATLAB file");
-  std::size_t dims[3] = {h, w, 3};
-  matvar_t* var =
-      Mat_VarCreate(variable.c_str(), MAT_C_DOUBLE, MAT_T_DOUBLE, 3, dims, data.data(), 0);
-  const bool ok = var != nullptr && Mat_VarWrite(mat, var, MAT_COMPRESSION_ZLIB) == 0;
-  if (var) Mat_VarFree(var);
-  if (Mat_Close(mat) != 0 || !ok) {
-    throw OutputError(path + ": cannot write: matio could not write variable " + variable);
-  }
-  SyncWrittenFile(path);
-  bool same = false;
-  try {
-    const ImageF back = ReadNormalMat(path, variable);
-    same = back.width == normals.width && back.height == normals.height &&
-           back.pixels == normals.pixels;
-  } catch (const std::exception&) {
-  }
-  if (!same) throw OutputError(path + ": cannot write: the file read back differs (disk full?)");
-}
-
-ImageF ReadNormalMat(const std::string& path, const std::string& variable) {
-  CheckMat5Complete(path);
-  mat_t* mat = Mat_Open(path.c_str(), MAT_ACC_RDONLY);
-  if (mat == nullptr) Fail(path, "not a MATLAB file matio can read");
-  matvar_t* info = Mat_VarReadInfo(mat, variable.c_str());
-  if (info == nullptr) {
-    Mat_Close(mat);
-    Fail(path, "has no variable " + variable);
-  }
-  const bool shape_ok = info->rank == 3 && info->dims[2] == 3 && !info->isComplex &&
-                        info->dims[0] > 0 && info->dims[1] > 0 &&
-                        info->dims[0] * info->dims[1] <= (std::size_t{1} << 31) &&
-                        (info->class_type == MAT_C_DOUBLE || info->class_type == MAT_C_SINGLE);
-  Mat_VarFree(info);
-  if (!shape_ok) {
-    Mat_Close(mat);
-    Fail(path, variable + " must be a real H x W x 3 array of double or single");
-  }
-  matvar_t* var = Mat_VarRead(mat, variable.c_str());
-  Mat_Close(mat);
-  if (var == nullptr || var->data == nullptr) {
-    if (var) Mat_VarFree(var);
-    Fail(path, "cannot read variable " + variable + " (corrupt file?)");
-  }
-  struct Free {
-    matvar_t* v;
-    ~Free() { Mat_VarFree(v); }
-  } free_var{var};
-  const std::size_t h = var->dims[0], w = var->dims[1];
-  const std::size_t element = var->class_type == MAT_C_DOUBLE ? sizeof(double) : sizeof(float);
-  if (var->rank != 3 || var->dims[2] != 3 || var->nbytes < h * w * 3 * element) {
-    Fail(path, variable + " holds fewer values than its size says (corrupt file?)");
-  }
-  ImageF normals(static_cast<int>(w), static_cast<int>(h), 3);
-  auto value = [&](std::size_t i) -> double {
-    return var->class_type == MAT_C_DOUBLE ? static_cast<const double*>(var->data)[i]
-                                           : static_cast<const float*>(var->data)[i];
-  };
-  for (std::size_t r = 0; r < h; ++r)
-    for (std::size_t c = 0; c < w; ++c)
-      for (std::size_t k = 0; k < 3; ++k)
-        normals.pixels[3 * (r * w + c) + k] = static_cast<float>(value(r + h * (c + w * k)));
-  return normals;
-}
-
-namespace {
-
-// A dataset without its images, plus what turns a decoded file into a working image.
 }  // namespace
 
 namespace internal {
@@ -468,121 +312,6 @@ Dataset LoadDataset(const std::string& directory, const DatasetLoadOptions& opti
       if (!message.empty()) throw std::runtime_error(message);
   }
   return std::move(p.d);
-}
-
-std::string CheckDatasetLights(const render::Scene& scene) {
-  for (std::size_t j = 0; j < scene.lighting.lights.size(); ++j) {
-    if (scene.lighting.lights[j].type != reflectance::LightType::kDirectional) {
-      return "light " + std::to_string(j + 1) +
-             " is a point light; per-light datasets (DiLiGenT layout) need directional lights";
-    }
-  }
-  return "";
-}
-
-void WriteDatasetFiles(OutputFolder& out, const std::string& prefix, const DatasetToWrite& d,
-                       const OutputSettings& settings) {
-  const std::size_t k = d.images.size();
-  if (k == 0) throw std::invalid_argument("a dataset needs at least one image");
-  const ImageF& first = *d.images[0];
-  for (const ImageF* image : d.images) {
-    if (image->width != first.width || image->height != first.height || image->channels != 3) {
-      throw std::invalid_argument("the images must all be " + SizeText(first.width, first.height) +
-                                  " RGB");
-    }
-  }
-  if (d.light_directions.size() != k ||
-      (!d.light_intensities.empty() && d.light_intensities.size() != k)) {
-    throw std::invalid_argument(std::to_string(k) + " images need " + std::to_string(k) +
-                                " light directions and intensities");
-  }
-  const Mask whole(first.width, first.height, true);
-  const Mask& mask = d.mask ? *d.mask : whole;
-  if (mask.width != first.width || mask.height != first.height) {
-    throw std::invalid_argument("the mask is " + SizeText(mask.width, mask.height) +
-                                ", the images " + SizeText(first.width, first.height));
-  }
-  if (d.normal_gt && (d.normal_gt->width != first.width || d.normal_gt->height != first.height ||
-                      d.normal_gt->channels != 3)) {
-    throw std::invalid_argument("the ground truth must be " + SizeText(first.width, first.height) +
-                                " x 3");
-  }
-  auto file = [&](const std::string& name) { return out.file(prefix + name); };
-  const std::string ext = settings.extension();
-  std::string names;
-  const int digits = std::max<int>(3, std::to_string(k).size());
-  for (std::size_t j = 0; j < k; ++j) {
-    std::string number = std::to_string(j + 1);
-    number.insert(0, digits - number.size(), '0');
-    WriteImage(file(number + ext), *d.images[j], settings.write_options());
-    names += number + ext + "\n";
-    if (d.progress) d.progress((j + 1.0) / k);
-  }
-  WriteTextFile(file("filenames.txt"), names);
-  WriteTextFile(file("light_directions.txt"), FormatTriples(d.light_directions));
-  WriteTextFile(file("light_intensities.txt"),
-                FormatTriples(d.light_intensities.empty() ? std::vector<Vec3d>(k, Vec3d::Ones())
-                                                          : d.light_intensities));
-  WriteImage(file("mask.png"), MaskImage(mask), {8, Encoding::kLinear});
-  if (d.normal_gt) {
-    WriteImage(file("normals.exr"), *d.normal_gt);
-    WriteImage(file("normals.png"), NormalMapPicture(*d.normal_gt, mask), {16, Encoding::kLinear});
-    WriteNormalMat(file("Normal_gt.mat"), "Normal_gt", *d.normal_gt);
-  }
-  if (!d.material_json.empty()) WriteTextFile(file("material.json"), d.material_json);
-}
-
-void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const render::Scene& scene,
-                       const render::RenderOptions& options, const render::RenderOutput& output,
-                       const OutputSettings& settings, bool per_light,
-                       const std::function<void(double)>& progress) {
-  if (per_light) {
-    if (std::string m = CheckDatasetLights(scene); !m.empty()) throw std::invalid_argument(m);
-  }
-  auto file = [&](const std::string& name) { return out.file(prefix + name); };
-  const std::string material = MaterialJson(scene, options).dump(2) + "\n";
-  if (per_light) {
-    DatasetToWrite d;
-    for (std::size_t j = 0; j < output.per_light.size(); ++j) {
-      d.images.push_back(&output.per_light[j]);
-      d.light_directions.push_back(scene.lighting.lights[j].direction_cam);
-      d.light_intensities.push_back(scene.lighting.lights[j].diffuse_intensity);
-    }
-    d.mask = &output.mask;
-    d.normal_gt = &output.normal_cam;
-    d.material_json = material;
-    d.progress = progress;
-    WriteDatasetFiles(out, prefix, d, settings);
-  } else {
-    WriteImage(file("image" + settings.extension()), output.image, settings.write_options());
-    WriteImage(file("mask.png"), MaskImage(output.mask), {8, Encoding::kLinear});
-    WriteImage(file("normals.exr"), output.normal_cam);
-    WriteImage(file("normals.png"), NormalMapPicture(output.normal_cam, output.mask),
-               {16, Encoding::kLinear});
-    WriteNormalMat(file("Normal_gt.mat"), "Normal_gt", output.normal_cam);
-    WriteTextFile(file("material.json"), material);
-  }
-  WriteImage(file("depth.exr"), output.depth);
-  WriteImage(file("albedo.exr"), output.albedo);
-  nlohmann::json meta;
-  meta["generator"] = "iphong render";
-  meta["images"] = per_light ? output.per_light.size() : 1;
-  meta["format"] = settings.format;
-  meta["bits"] = settings.format == "exr" ? 32 : settings.bits;
-  meta["encoding"] =
-      settings.format == "exr" || settings.encoding == Encoding::kLinear ? "linear" : "srgb";
-  meta["shading"] = render::ShadingName(options.shading);
-  meta["camera"] =
-      scene.camera.type == geometry::CameraType::kOrthographic ? "orthographic" : "perspective";
-  meta["depth"] = "distance along the view axis in scene units; 0 outside the mask";
-  meta["frame"] = "camera frame: x right, y up, z toward the viewer; row 0 at the top";
-  meta["supersampling"] = options.supersampling;
-  meta["shadows"] = options.shadows;
-  meta["noise"] = {{"gaussian_sigma", options.noise.gaussian_sigma},
-                   {"shot_photons", options.noise.shot_photons},
-                   {"quantization_bits", options.noise.quantization_bits},
-                   {"seed", options.noise.seed}};
-  WriteTextFile(file("render.json"), meta.dump(2) + "\n");
 }
 
 }  // namespace iphong::io

@@ -7,7 +7,8 @@
 //   mask.png                 nonzero = object (absent = whole image)
 //   Normal_gt.mat / normal.txt   optional ground truth
 //   material.json            optional known coefficients
-// iphong also writes normals.exr, depth.exr, albedo.exr and render.json (how it was rendered).
+// iphong also writes normals.exr, depth.exr, albedo.exr and render.json (how it was rendered):
+// io/dataset_write.h; Normal_gt.mat is read and written by io/normal_mat.h.
 #pragma once
 
 #include <functional>
@@ -18,10 +19,6 @@
 #include "core/resources.h"
 #include "io/capture.h"
 #include "io/dataset_text.h"
-#include "io/output_folder.h"
-#include "io/scene_file.h"
-#include "reflectance/material.h"
-#include "render/renderer.h"
 #include "solve/photometric_data.h"
 
 namespace iphong::io {
@@ -85,42 +82,5 @@ struct ObservationSet {
 };
 ObservationSet LoadObservations(const std::string& directory,
                                 const DatasetLoadOptions& options = {});
-
-// "" when every light can go into a per-light dataset (the DiLiGenT layout has directions only),
-// else which light cannot.
-std::string CheckDatasetLights(const render::Scene& scene);
-
-// A photometric-stereo dataset to write in the DiLiGenT layout.
-struct DatasetToWrite {
-  std::vector<const ImageF*> images;     // K, linear RGB, all the same size
-  std::vector<Vec3d> light_directions;   // K
-  std::vector<Vec3d> light_intensities;  // K (empty: all 1)
-  const Mask* mask = nullptr;            // nullptr: the whole image
-  const ImageF* normal_gt = nullptr;     // nullptr: no ground truth
-  std::string material_json;             // "" = none
-  std::function<void(double)> progress;  // the fraction of images written, when set
-};
-
-// Writes 001.<ext> ... (as `settings` say), filenames.txt, light_directions.txt,
-// light_intensities.txt, mask.png and, with ground truth, Normal_gt.mat, normals.exr and
-// normals.png, plus material.json when given: the files `iphong render --per-light` and
-// iphong.save_dataset write, which LoadDataset reads back. Throws std::invalid_argument for
-// inconsistent sizes or counts.
-void WriteDatasetFiles(OutputFolder& out, const std::string& prefix, const DatasetToWrite& d,
-                       const OutputSettings& settings);
-
-// Writes what `iphong render` produces into `out` under `prefix` ("" or "sub/"): with per_light,
-// a DiLiGenT dataset (one image per light); otherwise image.<ext> with all lights. Ground truth
-// either way. Nothing is visible until the caller commits `out`.
-void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const render::Scene& scene,
-                       const render::RenderOptions& options, const render::RenderOutput& output,
-                       const OutputSettings& settings, bool per_light,
-                       const std::function<void(double)>& progress = {});
-
-// MATLAB files: an H×W×3 double array, as DiLiGenT's Normal_gt. The write is verified by reading
-// the file back (OutputError); the read checks the file's structure first, since matio reads a
-// truncated compressed array as zeros without a word.
-void WriteNormalMat(const std::string& path, const std::string& variable, const ImageF& normals);
-ImageF ReadNormalMat(const std::string& path, const std::string& variable);
 
 }  // namespace iphong::io

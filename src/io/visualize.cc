@@ -12,6 +12,7 @@
 #include "io/dataset.h"
 #include "io/files.h"
 #include "io/image_io.h"
+#include "io/normal_mat.h"
 #include "render/preview.h"
 
 namespace iphong::io {

@@ -8,6 +8,7 @@
 #include "error_of.h"
 #include "geometry/primitives.h"
 #include "io/dataset.h"
+#include "io/dataset_write.h"
 #include "io/files.h"
 #include "io/mesh_io.h"
 #include "io/output_folder.h"

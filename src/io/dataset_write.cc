@@ -1,0 +1,163 @@
+#include "io/dataset_write.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "io/dataset_text.h"
+#include "io/files.h"
+#include "io/image_io.h"
+#include "io/normal_mat.h"
+#include "io/visualize.h"
+
+namespace iphong::io {
+namespace {
+
+ImageF MaskImage(const Mask& mask) {
+  ImageF image(mask.width, mask.height, 1);
+  for (std::size_t p = 0; p < mask.inside.size(); ++p) image.pixels[p] = mask.inside[p] ? 1.0f : 0;
+  return image;
+}
+
+nlohmann::json MaterialJson(const render::Scene& scene, const render::RenderOptions& options) {
+  const auto& first = scene.objects.front();
+  bool shared = true, kd_uniform = true;
+  for (const auto& o : scene.objects) {
+    shared = shared && o.material.ka == first.material.ka && o.material.ks == first.material.ks &&
+             o.material.shininess == first.material.shininess;
+    kd_uniform =
+        kd_uniform && o.material.kd == first.material.kd && o.albedo_texture.pixels.empty();
+  }
+  auto rgb = [](const Vec3d& v) { return nlohmann::json::array({v[0], v[1], v[2]}); };
+  nlohmann::json j;
+  j["model"] = reflectance::LobeName(options.model.lobe);
+  j["ambient"] = rgb(scene.lighting.ambient);
+  if (!shared) {
+    j["comment"] = "objects differ in ka, ks or shininess; these are the first object's";
+  }
+  j["ka"] = rgb(first.material.ka);
+  j["ks"] = rgb(first.material.ks);
+  j["shininess"] = first.material.shininess;
+  if (kd_uniform) j["kd"] = rgb(first.material.kd);
+  return j;
+}
+
+}  // namespace
+
+std::string CheckDatasetLights(const render::Scene& scene) {
+  for (std::size_t j = 0; j < scene.lighting.lights.size(); ++j) {
+    if (scene.lighting.lights[j].type != reflectance::LightType::kDirectional) {
+      return "light " + std::to_string(j + 1) +
+             " is a point light; per-light datasets (DiLiGenT layout) need directional lights";
+    }
+  }
+  return "";
+}
+
+void WriteDatasetFiles(OutputFolder& out, const std::string& prefix, const DatasetToWrite& d,
+                       const OutputSettings& settings) {
+  const std::size_t k = d.images.size();
+  if (k == 0) throw std::invalid_argument("a dataset needs at least one image");
+  const ImageF& first = *d.images[0];
+  for (const ImageF* image : d.images) {
+    if (image->width != first.width || image->height != first.height || image->channels != 3) {
+      throw std::invalid_argument("the images must all be " + SizeText(first.width, first.height) +
+                                  " RGB");
+    }
+  }
+  if (d.light_directions.size() != k ||
+      (!d.light_intensities.empty() && d.light_intensities.size() != k)) {
+    throw std::invalid_argument(std::to_string(k) + " images need " + std::to_string(k) +
+                                " light directions and intensities");
+  }
+  const Mask whole(first.width, first.height, true);
+  const Mask& mask = d.mask ? *d.mask : whole;
+  if (mask.width != first.width || mask.height != first.height) {
+    throw std::invalid_argument("the mask is " + SizeText(mask.width, mask.height) +
+                                ", the images " + SizeText(first.width, first.height));
+  }
+  if (d.normal_gt && (d.normal_gt->width != first.width || d.normal_gt->height != first.height ||
+                      d.normal_gt->channels != 3)) {
+    throw std::invalid_argument("the ground truth must be " + SizeText(first.width, first.height) +
+                                " x 3");
+  }
+  auto file = [&](const std::string& name) { return out.file(prefix + name); };
+  const std::string ext = settings.extension();
+  std::string names;
+  const int digits = std::max<int>(3, std::to_string(k).size());
+  for (std::size_t j = 0; j < k; ++j) {
+    std::string number = std::to_string(j + 1);
+    number.insert(0, digits - number.size(), '0');
+    WriteImage(file(number + ext), *d.images[j], settings.write_options());
+    names += number + ext + "\n";
+    if (d.progress) d.progress((j + 1.0) / k);
+  }
+  WriteTextFile(file("filenames.txt"), names);
+  WriteTextFile(file("light_directions.txt"), FormatTriples(d.light_directions));
+  WriteTextFile(file("light_intensities.txt"),
+                FormatTriples(d.light_intensities.empty() ? std::vector<Vec3d>(k, Vec3d::Ones())
+                                                          : d.light_intensities));
+  WriteImage(file("mask.png"), MaskImage(mask), {8, Encoding::kLinear});
+  if (d.normal_gt) {
+    WriteImage(file("normals.exr"), *d.normal_gt);
+    WriteImage(file("normals.png"), NormalMapPicture(*d.normal_gt, mask), {16, Encoding::kLinear});
+    WriteNormalMat(file("Normal_gt.mat"), "Normal_gt", *d.normal_gt);
+  }
+  if (!d.material_json.empty()) WriteTextFile(file("material.json"), d.material_json);
+}
+
+void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const render::Scene& scene,
+                       const render::RenderOptions& options, const render::RenderOutput& output,
+                       const OutputSettings& settings, bool per_light,
+                       const std::function<void(double)>& progress) {
+  if (per_light) {
+    if (std::string m = CheckDatasetLights(scene); !m.empty()) throw std::invalid_argument(m);
+  }
+  auto file = [&](const std::string& name) { return out.file(prefix + name); };
+  const std::string material = MaterialJson(scene, options).dump(2) + "\n";
+  if (per_light) {
+    DatasetToWrite d;
+    for (std::size_t j = 0; j < output.per_light.size(); ++j) {
+      d.images.push_back(&output.per_light[j]);
+      d.light_directions.push_back(scene.lighting.lights[j].direction_cam);
+      d.light_intensities.push_back(scene.lighting.lights[j].diffuse_intensity);
+    }
+    d.mask = &output.mask;
+    d.normal_gt = &output.normal_cam;
+    d.material_json = material;
+    d.progress = progress;
+    WriteDatasetFiles(out, prefix, d, settings);
+  } else {
+    WriteImage(file("image" + settings.extension()), output.image, settings.write_options());
+    WriteImage(file("mask.png"), MaskImage(output.mask), {8, Encoding::kLinear});
+    WriteImage(file("normals.exr"), output.normal_cam);
+    WriteImage(file("normals.png"), NormalMapPicture(output.normal_cam, output.mask),
+               {16, Encoding::kLinear});
+    WriteNormalMat(file("Normal_gt.mat"), "Normal_gt", output.normal_cam);
+    WriteTextFile(file("material.json"), material);
+  }
+  WriteImage(file("depth.exr"), output.depth);
+  WriteImage(file("albedo.exr"), output.albedo);
+  nlohmann::json meta;
+  meta["generator"] = "iphong render";
+  meta["images"] = per_light ? output.per_light.size() : 1;
+  meta["format"] = settings.format;
+  meta["bits"] = settings.format == "exr" ? 32 : settings.bits;
+  meta["encoding"] =
+      settings.format == "exr" || settings.encoding == Encoding::kLinear ? "linear" : "srgb";
+  meta["shading"] = render::ShadingName(options.shading);
+  meta["camera"] =
+      scene.camera.type == geometry::CameraType::kOrthographic ? "orthographic" : "perspective";
+  meta["depth"] = "distance along the view axis in scene units; 0 outside the mask";
+  meta["frame"] = "camera frame: x right, y up, z toward the viewer; row 0 at the top";
+  meta["supersampling"] = options.supersampling;
+  meta["shadows"] = options.shadows;
+  meta["noise"] = {{"gaussian_sigma", options.noise.gaussian_sigma},
+                   {"shot_photons", options.noise.shot_photons},
+                   {"quantization_bits", options.noise.quantization_bits},
+                   {"seed", options.noise.seed}};
+  WriteTextFile(file("render.json"), meta.dump(2) + "\n");
+}
+
+}  // namespace iphong::io

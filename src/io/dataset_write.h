@@ -1,0 +1,46 @@
+// Writing photometric-stereo datasets in the DiLiGenT layout (io/dataset.h lists its files):
+// what `iphong render` and iphong.save_dataset produce and io/dataset.h's LoadDataset reads back.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "io/output_folder.h"
+#include "io/scene_file.h"
+#include "render/renderer.h"
+
+namespace iphong::io {
+
+// "" when every light can go into a per-light dataset (the DiLiGenT layout has directions only),
+// else which light cannot.
+std::string CheckDatasetLights(const render::Scene& scene);
+
+// A photometric-stereo dataset to write in the DiLiGenT layout.
+struct DatasetToWrite {
+  std::vector<const ImageF*> images;     // K, linear RGB, all the same size
+  std::vector<Vec3d> light_directions;   // K
+  std::vector<Vec3d> light_intensities;  // K (empty: all 1)
+  const Mask* mask = nullptr;            // nullptr: the whole image
+  const ImageF* normal_gt = nullptr;     // nullptr: no ground truth
+  std::string material_json;             // "" = none
+  std::function<void(double)> progress;  // the fraction of images written, when set
+};
+
+// Writes 001.<ext> ... (as `settings` say), filenames.txt, light_directions.txt,
+// light_intensities.txt, mask.png and, with ground truth, Normal_gt.mat, normals.exr and
+// normals.png, plus material.json when given: the files `iphong render --per-light` and
+// iphong.save_dataset write, which LoadDataset reads back. Throws std::invalid_argument for
+// inconsistent sizes or counts.
+void WriteDatasetFiles(OutputFolder& out, const std::string& prefix, const DatasetToWrite& d,
+                       const OutputSettings& settings);
+
+// Writes what `iphong render` produces into `out` under `prefix` ("" or "sub/"): with per_light,
+// a DiLiGenT dataset (one image per light); otherwise image.<ext> with all lights. Ground truth
+// either way. Nothing is visible until the caller commits `out`.
+void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const render::Scene& scene,
+                       const render::RenderOptions& options, const render::RenderOutput& output,
+                       const OutputSettings& settings, bool per_light,
+                       const std::function<void(double)>& progress = {});
+
+}  // namespace iphong::io
