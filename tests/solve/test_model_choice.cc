@@ -1,0 +1,234 @@
+// The model choice (solve/model_choice.h) on renders with exact ground truth: the lobe, its
+// shininess, the ambient term and the reading of integer codes come back from held-out prediction.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "solve/metrics.h"
+#include "solve/model_choice.h"
+#include "solve/normals.h"
+#include "synthetic_spheres.h"
+
+namespace iphong::solve {
+namespace {
+
+using test_data::MakeSphereData;
+using test_data::MakeTwoBallsData;
+using test_data::Plastic;
+using test_data::Synthetic;
+
+TEST(Normals, ChoosesTheLobeAndEstimatesKsAndAmbient) {
+  const auto m = Plastic();
+  const Synthetic s = MakeSphereData(m, 24, 0.0, Vec3d::Ones());
+  NormalOptions o;  // nothing known
+  const NormalResult r = EstimateNormals(s.data, o);
+  EXPECT_TRUE(r.material_estimated);
+  EXPECT_EQ(r.model, reflectance::Lobe::kPhong);
+  // The golden-section search of log n stops within 4 % (model_choice.h).
+  EXPECT_NEAR(r.shininess / 20, 1.0, 0.05);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(r.ambient_term[c], 0.02, 0.005);
+  const AngularErrorMetrics e = CompareNormals(r.normals, s.out.normal_cam, s.out.mask);
+  RecordProperty("mean_error_deg", std::to_string(e.mean_deg));
+  EXPECT_LT(e.mean_deg, 0.5);
+  // Lambertian fitting of the same images is clearly worse: highlights bias it.
+  NormalOptions lambert;
+  lambert.model = reflectance::Lobe::kLambert;
+  const AngularErrorMetrics w =
+      CompareNormals(EstimateNormals(s.data, lambert).normals, s.out.normal_cam, s.out.mask);
+  EXPECT_GT(w.mean_deg, 3 * e.mean_deg);
+}
+
+// The model choice's sample covers a whole-frame capture: an even stride of 96 through 240×240
+// pixels in raster order visits 5 columns; the golden-ratio sequence visits most of them.
+TEST(Normals, ModelChoiceSampleIsSpreadOverRowsAndColumns) {
+  const std::vector<std::size_t> sample = SpreadIndices(240 * 240, 600);
+  ASSERT_EQ(sample.size(), 600u);
+  EXPECT_TRUE(std::is_sorted(sample.begin(), sample.end()));
+  std::vector<int> columns(240, 0), rows(240, 0);
+  for (const std::size_t p : sample) {
+    ASSERT_LT(p, 240u * 240u);
+    columns[p % 240] = 1, rows[p / 240] = 1;
+  }
+  EXPECT_GT(std::accumulate(columns.begin(), columns.end(), 0), 200);
+  EXPECT_GT(std::accumulate(rows.begin(), rows.end(), 0), 200);
+  EXPECT_EQ(SpreadIndices(7, 600), (std::vector<std::size_t>{0, 1, 2, 3, 4, 5, 6}));
+}
+
+// The held-out test predicts from each fold's normal refined off the search's grid: from the
+// grid's normals (up to ~2° off) a sharp lobe loses to a broader one for that alone, and a
+// noise-free Phong n 30 came back as 38.6 (the median pixel 0.27° off instead of exact).
+TEST(Normals, UnknownShininessComesBackExactlyFromNoiseFreeImages) {
+  for (const auto& [lobe, shininess] : {std::pair{reflectance::Lobe::kPhong, 30.0},
+                                        std::pair{reflectance::Lobe::kBlinnPhong, 90.0}}) {
+    reflectance::Material m = Plastic();
+    m.ka = Vec3d::Zero();
+    m.shininess = shininess;
+    const Synthetic s = MakeSphereData(m, 48, 0.0, Vec3d::Zero(), 96, false, lobe);
+    const NormalResult r = EstimateNormals(s.data, NormalOptions{});
+    EXPECT_EQ(r.model, lobe);
+    // The golden-section search of log n stops within 4 %.
+    EXPECT_NEAR(r.shininess / shininess, 1.0, 0.05) << reflectance::LobeName(lobe);
+    const AngularErrorMetrics e = CompareNormals(r.normals, s.out.normal_cam, s.out.mask);
+    RecordProperty(reflectance::LobeName(lobe) + "_shininess", std::to_string(r.shininess));
+    RecordProperty(reflectance::LobeName(lobe) + "_mean_deg", std::to_string(e.mean_deg));
+    EXPECT_LT(e.median_deg, 0.02) << reflectance::LobeName(lobe);
+    EXPECT_LT(e.mean_deg, 0.1) << reflectance::LobeName(lobe);
+  }
+}
+
+// The ambient term is in the model of every image; unknown, it is estimated from the pixels that
+// see a light from behind and kept only where it predicts held-out observations better.
+TEST(Normals, UnknownAmbientOfAnyStrength) {
+  reflectance::Material m = Plastic();
+  m.ka = Vec3d(0.1, 0.1, 0.1);
+  std::string table;
+  for (const double ambient : {0.0, 0.2, 0.5, 1.0}) {
+    const Synthetic s = MakeSphereData(m, 24, 0.0, Vec3d::Constant(ambient));
+    const NormalResult r = EstimateNormals(s.data, NormalOptions{});
+    const double e = CompareNormals(r.normals, s.out.normal_cam, s.out.mask).mean_deg;
+    table += " Ia " + std::to_string(ambient) + ": " + std::to_string(e) + " deg;";
+    // 0.027, 0.028, 0.028, 0.031 measured (0.13, 0.14, 0.15, 0.18 when the held-out folds
+    // predicted from grid normals, and 0.13, 0.10, 0.11, 0.40 when the lobe was chosen before the
+    // ambient term).
+    EXPECT_LT(e, 0.1) << "ambient " << ambient;
+    EXPECT_NEAR(r.ambient_term[0], 0.1 * ambient, 0.01) << "ambient " << ambient;
+  }
+  RecordProperty("ambient_table", table);
+}
+
+// Twelve lights on one ring: halves of six cannot test a specular model (each lost to Lambert and
+// the sphere came out 1.4–1.7° off); leave-one-out folds can.
+TEST(Normals, FewLightsAreCrossValidatedLeavingOneOut) {
+  EXPECT_EQ(FoldCount(96), 2);
+  EXPECT_EQ(FoldCount(40), 3);
+  EXPECT_EQ(FoldCount(24), 24);
+  EXPECT_EQ(FoldCount(12), 12);
+  reflectance::Material m = Plastic();
+  m.ka = Vec3d::Constant(0.1);
+  std::string table;
+  for (const double ambient : {0.0, 0.2, 0.5, 1.0}) {
+    const Synthetic s = MakeSphereData(m, 12, 0.0, Vec3d::Constant(ambient), 96, true);
+    const NormalResult r = EstimateNormals(s.data, NormalOptions{});
+    const double e = CompareNormals(r.normals, s.out.normal_cam, s.out.mask).mean_deg;
+    table += " Ia " + std::to_string(ambient) + ": " + std::to_string(e) + " deg;";
+    EXPECT_NE(r.model, reflectance::Lobe::kLambert) << "ambient " << ambient;
+    // 0.070, 0.040, 0.070, 0.074 measured; 0.21, 0.22, 0.21, 0.23 from grid normals; 0.21, 0.22,
+    // 0.14, 0.66 when the lobe was chosen before the ambient term (at Ia 1 the broadest lobe
+    // imitated it).
+    EXPECT_LT(e, 0.1) << "ambient " << ambient;
+    EXPECT_NEAR(r.ambient_term[0], 0.1 * ambient, 0.01) << "ambient " << ambient;
+  }
+  RecordProperty("ring_table", table);
+}
+
+TEST(Normals, IntegerCodesAreRecognized) {
+  PhotometricData d;
+  d.images = 1;
+  d.values = {0.0f, 1 / 255.0f, 0.5f + 0.5f / 255, 1.0f, 37 / 255.0f, 254 / 255.0f};
+  EXPECT_DOUBLE_EQ(IntegerCodeStep(d), 1 / 255.0);
+  d.values = {0.0f, 1 / 65535.0f, 30001 / 65535.0f, 65534 / 65535.0f, 1.0f, 16384 / 65535.0f};
+  EXPECT_DOUBLE_EQ(IntegerCodeStep(d), 1 / 65535.0);
+  d.values = {0.0f, 1 / 1023.0f, 700 / 1023.0f};
+  EXPECT_DOUBLE_EQ(IntegerCodeStep(d), 1 / 1023.0);
+  // Floats, and 8-bit sRGB codes decoded to linear values, are not codes (a few values may be
+  // near one by chance, not a whole image's).
+  d.values.clear();
+  for (int i = 0; i < 100; ++i) d.values.push_back(static_cast<float>(0.01 * i + 0.00123 * i * i));
+  EXPECT_EQ(IntegerCodeStep(d), 0.0);
+  d.values.clear();
+  for (int k = 0; k < 256; k += 3) {
+    const double v = k / 255.0;
+    d.values.push_back(
+        static_cast<float>(v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4)));
+  }
+  EXPECT_EQ(IntegerCodeStep(d), 0.0);
+}
+
+// 8-bit images made by truncating (code k for a value in [k, k + 1)), as a conversion that
+// drops the low byte of 16-bit data does: on average half a code darker, a bias that grows to
+// tens of percent in the dark observations that decide the normal near the terminator. The plan
+// finds it by held-out prediction and takes each nonzero code at the middle of its interval;
+// rounded codes it leaves as they are.
+TEST(Normals, TruncatedIntegerCodesAreTakenAtTheirMiddle) {
+  // Dim, as DiLiGenT's 8-bit crops are (their median code is 12 to 17): kd 0.08 is 20 codes.
+  reflectance::Material dim;
+  dim.kd = Vec3d(0.08, 0.07, 0.06);
+  dim.ks = Vec3d::Constant(0.5);
+  dim.shininess = 50;
+  // 96 lights, as DiLiGenT has: with 48 the held-out choice did not tell the two apart (the
+  // codes were then taken as recorded, as before).
+  const Synthetic s = MakeSphereData(dim, 96, 0.0, Vec3d::Zero(), 64);
+  const auto quantized = [&](bool truncate) {
+    PhotometricData q = s.data;
+    for (float& v : q.values) {
+      const double code = std::clamp(v * 255.0, 0.0, 255.0);
+      v = static_cast<float>((truncate ? std::floor(code) : std::round(code)) / 255);
+    }
+    return q;
+  };
+  const PhotometricData truncated = quantized(true);
+  NormalPlan plan = PlanNormals(truncated, NormalOptions{});
+  EXPECT_DOUBLE_EQ(plan.model_choice.code_step, 1 / 255.0);
+  EXPECT_DOUBLE_EQ(plan.options.code_offset, 0.5 / 255);
+  EXPECT_EQ(PlanNormals(quantized(false), NormalOptions{}).options.code_offset, 0.0);
+  // With the model the plan chose, against the same codes taken as they are.
+  const auto error = [&](const NormalPlan& p) {
+    return CompareNormals(SolveNormalsWithPlan(truncated, p).normals, s.out.normal_cam, s.out.mask)
+        .mean_deg;
+  };
+  const double middle = error(plan);
+  plan.options.code_offset = 0;
+  const double as_recorded = error(plan);
+  std::printf("truncated 8-bit codes: %.3f deg at their middle, %.3f deg as recorded\n", middle,
+              as_recorded);
+  EXPECT_LT(middle, 0.7 * as_recorded);
+}
+
+// A matte ball beside a glossy one: the object's model is specular, but each pixel keeps it only
+// where it predicts the pixel's own held-out lights better than Lambert.
+TEST(Normals, EachPixelKeepsTheSpecularModelOnlyWhereItPredictsBetter) {
+  reflectance::Material glossy, matte;
+  glossy.kd = matte.kd = Vec3d(0.5, 0.4, 0.3);
+  glossy.ks = Vec3d::Constant(0.5);
+  glossy.shininess = 20;
+  const Synthetic s = MakeTwoBallsData(glossy, matte);
+  const NormalResult r = EstimateNormals(s.data, NormalOptions{});
+  ASSERT_NE(r.model, reflectance::Lobe::kLambert);
+  ASSERT_EQ(r.model_map.width, 160);
+  // Counted over each ball's disc.
+  double specular[2] = {0, 0}, count[2] = {0, 0};
+  for (int y = 0; y < 80; ++y) {
+    for (int x = 0; x < 160; ++x) {
+      const float v = r.model_map.pixels[y * 160 + x];
+      if (v < 0) continue;
+      specular[x >= 80] += v;
+      count[x >= 80] += 1;
+    }
+  }
+  const double glossy_share = specular[0] / count[0], matte_share = specular[1] / count[1];
+  RecordProperty("glossy_share", std::to_string(glossy_share));
+  RecordProperty("matte_share", std::to_string(matte_share));
+  EXPECT_LT(matte_share, 0.2);
+  EXPECT_GT(glossy_share, 0.3);  // the lobe shows on part of the ball only
+  EXPECT_LT(CompareNormals(r.normals, s.out.normal_cam, s.out.mask).mean_deg, 0.3);
+  NormalOptions object_wide;
+  object_wide.per_pixel_model = false;
+  EXPECT_TRUE(EstimateNormals(s.data, object_wide).model_map.pixels.empty());
+}
+
+TEST(Normals, MatteObjectsChooseLambert) {
+  reflectance::Material matte;
+  matte.kd = Vec3d(0.6, 0.6, 0.6);
+  const Synthetic s = MakeSphereData(matte, 16, 0.0);
+  const NormalResult r = EstimateNormals(s.data, NormalOptions{});
+  EXPECT_EQ(r.model, reflectance::Lobe::kLambert);
+  EXPECT_FALSE(r.material_estimated);
+  EXPECT_FALSE(r.specular_identifiable);
+  EXPECT_NE(r.specular_note.find("Lambert"), std::string::npos);
+  EXPECT_LT(CompareNormals(r.normals, s.out.normal_cam, s.out.mask).mean_deg, 0.05);
+}
+
+}  // namespace
+}  // namespace iphong::solve
