@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "core/resources.h"
 #include "core/types.h"
 #include "solve/photometric_data.h"
 
@@ -200,6 +201,18 @@ inline solve::PhotometricData ToObservations(const FloatStack& images,
   std::vector<const float*> pointers;
   for (std::size_t j = 0; j < k; ++j) pointers.push_back(images.data() + j * h * w * 3);
   return solve::GatherObservations(pointers, w, h, ToMask(mask, w, h), directions, intensities);
+}
+
+// The memory limit of a call: max_memory_gb, or the default (3/4 of the machine's).
+inline MemoryLimit MemoryLimitFrom(const py::object& max_memory_gb) {
+  MemoryLimit limit;
+  limit.knob = "max_memory_gb=";
+  if (!max_memory_gb.is_none()) {
+    const double gb = ToNumber(max_memory_gb, "max_memory_gb");
+    if (!(gb > 0)) throw std::invalid_argument("max_memory_gb: expected a number > 0");
+    limit.bytes = static_cast<std::uint64_t>(gb * 1e9);
+  }
+  return limit;
 }
 
 }  // namespace iphong::python

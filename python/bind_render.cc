@@ -17,18 +17,6 @@ namespace py = pybind11;
 namespace iphong::python {
 namespace {
 
-// The memory limit of a call: max_memory_gb, or the default (3/4 of the machine's).
-MemoryLimit Limit(const py::object& max_memory_gb) {
-  MemoryLimit limit;
-  limit.knob = "max_memory_gb=";
-  if (!max_memory_gb.is_none()) {
-    const double gb = ToNumber(max_memory_gb, "max_memory_gb");
-    if (!(gb > 0)) throw std::invalid_argument("max_memory_gb: expected a number > 0");
-    limit.bytes = static_cast<std::uint64_t>(gb * 1e9);
-  }
-  return limit;
-}
-
 py::dict RenderScene(io::SceneFile file, bool per_light, const MemoryLimit& memory) {
   render::RenderOutput out;
   file.options.memory = memory;
@@ -62,7 +50,7 @@ void BindRender(py::module_& m) {
       "_render_json",
       [](const std::string& text, const std::string& source, const std::string& base_dir,
          bool per_light, const py::object& max_memory_gb) {
-        const MemoryLimit memory = Limit(max_memory_gb);
+        const MemoryLimit memory = MemoryLimitFrom(max_memory_gb);
         return RenderScene(io::ParseScene(text, source, base_dir, memory), per_light, memory);
       },
       py::arg("text"), py::arg("source"), py::arg("base_dir"), py::arg("per_light"),
@@ -70,7 +58,7 @@ void BindRender(py::module_& m) {
   m.def(
       "_render_file",
       [](const std::string& path, bool per_light, const py::object& max_memory_gb) {
-        const MemoryLimit memory = Limit(max_memory_gb);
+        const MemoryLimit memory = MemoryLimitFrom(max_memory_gb);
         return RenderScene(io::LoadSceneFile(path, memory), per_light, memory);
       },
       py::arg("path"), py::arg("per_light"), py::arg("max_memory_gb") = py::none());
@@ -82,7 +70,7 @@ void BindRender(py::module_& m) {
          const py::object& crop, int downscale) {
         io::Dataset d;
         io::DatasetLoadOptions options;
-        options.memory = Limit(max_memory_gb);
+        options.memory = MemoryLimitFrom(max_memory_gb);
         options.capture.lights = lights;
         options.capture.intensities = intensities;
         options.capture.mask = mask;

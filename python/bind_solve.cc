@@ -9,6 +9,7 @@
 
 #include "arrays.h"
 #include "bindings.h"
+#include "solve/few_images.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
 
@@ -294,7 +295,8 @@ depend on its own observations and the plan only, so any blocking gives the same
       [](const py::object& images_in, const py::object& light_directions,
          const py::object& light_intensities, const py::object& mask_in, const py::object& model,
          const py::object& material, double discard_dark, double discard_bright, bool fast,
-         double shadow_threshold, int threads) {
+         double shadow_threshold, int threads, const py::object& max_memory_gb) {
+        const MemoryLimit memory = MemoryLimitFrom(max_memory_gb);
         const FloatStack images = ToImageStack(images_in);
         const std::size_t k = images.shape(0);
         const solve::PhotometricData data = ToObservations(
@@ -305,6 +307,13 @@ depend on its own observations and the plan only, so any blocking gives the same
           throw std::invalid_argument(
               "with 1 or 2 images pass material={'kd': ..., ...}: the coefficients must be "
               "known");
+        }
+        // The one- and two-image solve needs kFewImageBytesPerPixel a masked pixel: refused
+        // before it starts rather than let it outgrow the machine.
+        if (k < 3) {
+          RequireMemory(
+              memory, data.pixels.size() * solve::kFewImageBytesPerPixel,
+              "the one- and two-image solve of " + std::to_string(data.pixels.size()) + " pixels");
         }
         solve::NormalResult result;
         {
@@ -352,6 +361,7 @@ depend on its own observations and the plan only, so any blocking gives the same
       py::arg("mask") = py::none(), py::arg("model") = py::none(), py::arg("material") = py::none(),
       py::arg("discard_dark") = 0.3, py::arg("discard_bright") = 0.1, py::arg("fast") = false,
       py::arg("shadow_threshold") = solve::NormalOptions{}.shadow_threshold, py::arg("threads") = 0,
+      py::arg("max_memory_gb") = py::none(),
       R"doc(Recover per-pixel normals and albedo (see `iphong normals`).
 
 images (K, H, W, 3) linear float; light_directions (K, 3) from the surface toward the light;
@@ -366,7 +376,9 @@ Returns normals (H, W, 3), albedo (H, W, 3), specular (H, W, 3: each pixel's ks;
 lambert), residual (H, W; -1 where no normal was found),
 the specular coefficients used or estimated, and a summary. With 1 or 2 images (material with
 kd required) the global solver with smoothness, integrability and boundary priors runs instead and
-the result has ambiguity_deg (H, W): the angle the data alone leaves open per pixel.)doc");
+the result has ambiguity_deg (H, W): the angle the data alone leaves open per pixel; it needs
+about 4 kB a masked pixel, and ValueError says so before it starts when that is more than
+max_memory_gb (default: three quarters of the machine's).)doc");
 
   m.def(
       "angular_error",

@@ -15,6 +15,7 @@
 #include "iphong/normals_command.h"
 #include "render/preview.h"
 #include "solve/bands.h"
+#include "solve/few_images.h"
 
 namespace iphong::cli {
 namespace {
@@ -25,11 +26,6 @@ constexpr double kProcessBytes = 200e6;
 // Per working pixel of a band beyond its observations: the fitted results (11 floats), the
 // per-pixel solutions of the fit and the pictures' rows.
 constexpr double kResultBytesPerPixel = 11 * 4 + 160 + 4 * 6;
-// Per masked pixel of one or two images, whose global solve keeps its observation pyramid, the
-// candidate search's answers and the sparse system of every level (peak resident memory of a
-// sphere from one image: 280 MB at 37 k pixels, 680 MB at 149 k, 2.3 GB at 595 k: 3.7 KB a
-// pixel). Without it a 12-megapixel photo was let through to need some 45 GB.
-constexpr double kFewImageBytesPerPixel = 4000;
 
 // The rows of a band: the masked pixels of rows [y0, y1) of the working mask.
 Mask BandMask(const Mask& mask, int y0, int y1) {
@@ -62,7 +58,7 @@ NormalsMemory EstimateNormalsMemory(const io::CaptureBands& capture,
   m.whole_bytes = kProcessBytes + k * masked * 3 * sizeof(float) + decoding +
                   pixels * (kResultBytesPerPixel + 1) +
                   (d.files.ground_truth_path.empty() ? 0.0 : pixels * 3 * 8 * 2) +
-                  (k < 3 ? masked * kFewImageBytesPerPixel : 0.0);
+                  (k < 3 ? masked * solve::kFewImageBytesPerPixel : 0.0);
   // In bands: the plan sample's observations stay for the whole run.
   const double sample = std::min<double>(masked, static_cast<double>(options.plan_sample));
   m.fixed_bytes = kProcessBytes + capture.FixedBytes() + sample * (k * 3 * sizeof(float) + 64);

@@ -32,6 +32,23 @@ def test_two_images_with_a_string_albedo():
                                 material={"kd": "red"})
 
 
+def test_one_image_is_refused_when_its_global_solve_would_not_fit():
+    """One or two images are solved whole at about 4 kB a masked pixel: a 2000 x 2000 image needs
+    16 GB, which is refused before the solve starts rather than let it outgrow the machine (a
+    12-megapixel photo would need some 45 GB); a small one runs under the same limit."""
+    big = np.full((1, 2000, 2000, 3), 0.5, np.float32)
+    with pytest.raises(ValueError, match=r"one- and two-image solve of 4000000 pixels needs 16.0 GB, "
+                                         r"more than the memory limit of 1.0 GB \(raise it with "
+                                         r"max_memory_gb=\)"):
+        iphong.estimate_normals(big, [[0, 0, 1]], material={"kd": 0.5}, max_memory_gb=1)
+    with pytest.raises(ValueError, match="max_memory_gb: expected a number > 0"):
+        iphong.estimate_normals(big[:, :8, :8], [[0, 0, 1]], material={"kd": 0.5}, max_memory_gb=0)
+    small = iphong.estimate_normals(big[:, :16, :16], [[0, 0, 1]], material={"kd": 0.5},
+                                    max_memory_gb=1)
+    # 0.5 = kd 0.5 x N.L: every normal faces the light, (0, 0, 1).
+    assert np.allclose(small["normals"][..., 2], 1, atol=1e-3)
+
+
 def test_height_to_mesh_with_zero_intrinsics():
     height = np.zeros((4, 4), np.float32)
     with pytest.raises(ValueError, match="intrinsics need finite fx, fy > 0"):
