@@ -100,8 +100,14 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     out["code_offset"] = plan["options"]["code_offset"]
     out["plan"] = plan
 
-    def median_ks(specular, residual):
-        solved = specular[residual >= 0]
+    def median_ks(specular, residual, model_map):
+        # With the per-pixel test (when the C++ solver makes its model map) only the pixels
+        # that kept the lobe (1) count: Lambert's have ks 0 by choice, as in the C++ solver.
+        o = plan["options"]
+        per_pixel = (o["per_pixel_model"] and not o["material_known"] and o["model"] != "lambert"
+                     and len(plan["fold"]) > 0)
+        used = (residual >= 0) & ((model_map == 1) if per_pixel else True)
+        solved = specular[used]
         if plan["options"]["material_known"]:
             return _np.asarray(plan["options"]["ks"])
         if solved.size == 0 or plan["options"]["model"] == "lambert":
@@ -111,9 +117,11 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
 
     if positions.size:
         ks = dask.delayed(median_ks)(out["specular"].vindex[rows, cols],
-                                     out["residual"].vindex[rows, cols])
+                                     out["residual"].vindex[rows, cols],
+                                     out["model_map"].vindex[rows, cols])
     else:
-        ks = dask.delayed(median_ks)(_np.zeros((0, 3), _np.float32), _np.zeros(0, _np.float32))
+        ks = dask.delayed(median_ks)(_np.zeros((0, 3), _np.float32), _np.zeros(0, _np.float32),
+                                     _np.zeros(0, _np.float32))
     out["ks"] = da.from_delayed(ks, shape=(3,), dtype=_np.float64)
     return out
 

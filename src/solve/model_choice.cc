@@ -118,17 +118,6 @@ std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
   return cost;
 }
 
-// Mean and standard error of the per-pixel difference a − b.
-std::pair<double, double> PairedDifference(const std::vector<double>& a,
-                                           const std::vector<double>& b) {
-  const double n = static_cast<double>(std::max<std::size_t>(1, a.size()));
-  double sum = 0, sq = 0;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    sum += a[i] - b[i], sq += (a[i] - b[i]) * (a[i] - b[i]);
-  const double mean = sum / n;
-  return {mean, std::sqrt(std::max(0.0, sq / n - mean * mean) / n)};
-}
-
 // Pixels spread over the object (SpreadIndices) with at least 3 usable observations (in each half,
 // with `fold`).
 std::vector<Sample> SamplePixels(const PhotometricData& data, const ModelChoiceSettings& settings,
@@ -158,6 +147,19 @@ std::vector<Sample> SamplePixels(const PhotometricData& data, const ModelChoiceS
 }
 
 }  // namespace
+
+std::pair<double, double> PairedDifference(const double* a, const double* b, std::size_t n,
+                                           const double* use) {
+  double count = 0, sum = 0, sq = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (use && use[i] == 0) continue;
+    const double d = a[i] - b[i];
+    count += 1, sum += d, sq += d * d;
+  }
+  if (count == 0) return {0.0, 0.0};
+  const double mean = sum / count;
+  return {mean, std::sqrt(std::max(0.0, sq / count - mean * mean) / count)};
+}
 
 std::vector<std::size_t> SpreadIndices(std::size_t n, int count) {
   std::vector<std::size_t> out;
@@ -419,10 +421,27 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   const std::size_t lowest_index = lowest();
   std::size_t pick = lowest_index;
   for (std::size_t i = 0; i < choice.scored.size(); ++i) {
-    const auto [mean, error] = PairedDifference(costs[i], costs[lowest_index]);
+    const auto [mean, error] =
+        PairedDifference(costs[i].data(), costs[lowest_index].data(), costs[i].size());
     if (mean <= error && choice.scored[i].fold_angle_deg < choice.scored[pick].fold_angle_deg) {
       pick = i;
     }
+  }
+  // A specular model is used only where it predicts better than Lambert: when Lambert's cost is
+  // not distinguishable from the lowest either (a matte object, whose lobes all fit ks ≈ 0 and
+  // predict exactly as Lambert does), Lambert it is.
+  std::optional<std::size_t> lambert_index;
+  for (std::size_t i = 0; i < choice.scored.size(); ++i) {
+    if (choice.scored[i].lobe == reflectance::Lobe::kLambert &&
+        (!lambert_index ||
+         choice.scored[i].heldout_cost < choice.scored[*lambert_index].heldout_cost)) {
+      lambert_index = i;
+    }
+  }
+  if (lambert_index) {
+    const auto [mean, error] = PairedDifference(
+        costs[*lambert_index].data(), costs[lowest_index].data(), costs[lowest_index].size());
+    if (mean <= error) pick = *lambert_index;
   }
   const ModelCandidate best = choice.scored[pick];
   choice.chosen = best;

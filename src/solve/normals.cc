@@ -120,6 +120,8 @@ void AppendSampleSpecular(const NormalResult& result, const PhotometricData& dat
   for (std::size_t i : indices) {
     const std::size_t p = static_cast<std::size_t>(data.pixels[i]);
     if (result.residual.pixels[p] < 0) continue;
+    // Where the pixel's own test gave it to Lambert its ks is 0 by choice, not a measurement.
+    if (!result.model_map.pixels.empty() && result.model_map.pixels[p] != 1) continue;
     const float* v = result.specular.pixels.data() + 3 * p;
     ks.emplace_back(v[0], v[1], v[2]);
   }
@@ -241,7 +243,7 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
         lambert_fitter.emplace(data, lambert_fit);
         lambert_search.emplace(*lambert_table);
       }
-      std::vector<double> buffer;
+      std::vector<double> buffer, lambert_cost(data.images), specular_cost(data.images);
       NormalSearch search(
           table, 16,
           fit.ks_prior ? std::optional(internal::Luminance(*fit.ks_prior)) : std::nullopt,
@@ -273,19 +275,27 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
           // each fold's training lights near the all-lights answer (the tables share their
           // directions, and the two models' answers for a pixel lie near each other: searching
           // Lambert's own on all lights as well cost a fifth of the run, and leaving it out moved
-          // the seven DiLiGenT runs by 0.01° at most, harvest by −0.13°), and the held-out costs
-          // decide.
-          bool lambert_wins = r.ks == 0;
+          // the seven DiLiGenT runs by 0.01° at most, harvest by −0.13°), and Lambert takes the
+          // pixel only where it predicts the held-out lights clearly better
+          // (kPixelModelSignificance).
+          double lobe_peak = 0;
+          const float* lobe = table.specular(r.candidate);
+          for (int j = 0; j < data.images; ++j) {
+            if (fitter.usable()[j] != 0) lobe_peak = std::max(lobe_peak, r.ks * lobe[j]);
+          }
+          bool lambert_wins =
+              lobe_peak <= kNegligibleLobe * fitter.threshold() / o.shadow_threshold;
           if (!lambert_wins) {
             lambert_search->NearTheLastOf(search);
-            const HeldOutResult lambert =
-                HeldOutSearch(*lambert_search, *lambert_table, fitter.luminance(), fitter.usable(),
-                              fold.data(), fitter.threshold(), buffer, true);
+            HeldOutSearch(*lambert_search, *lambert_table, fitter.luminance(), fitter.usable(),
+                          fold.data(), fitter.threshold(), buffer, true, nullptr,
+                          lambert_cost.data());
             // The specular search above was the last full one of `search`.
-            const HeldOutResult specular =
-                HeldOutSearch(search, table, fitter.luminance(), fitter.usable(), fold.data(),
-                              fitter.threshold(), buffer, true);
-            lambert_wins = lambert.cost <= specular.cost;
+            HeldOutSearch(search, table, fitter.luminance(), fitter.usable(), fold.data(),
+                          fitter.threshold(), buffer, true, nullptr, specular_cost.data());
+            const auto [mean, error] = PairedDifference(lambert_cost.data(), specular_cost.data(),
+                                                        lambert_cost.size(), fitter.usable());
+            lambert_wins = mean <= -kPixelModelSignificance * error;
           }
           won[p] = lambert_wins ? 0 : 1;
           if (lambert_wins) {

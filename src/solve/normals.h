@@ -57,8 +57,9 @@ struct NormalOptions {
   // in accuracy and keeps a capture of any size to a fixed first pass.
   std::size_t plan_sample = 131072;
   // Estimated coefficients: each pixel also chooses between Lambert and the object's specular
-  // model by its own held-out prediction (the same halves of the lights), so a region the
-  // specular model does not predict better — dark, or matte on a glossy object — is Lambertian.
+  // model by its own held-out prediction (the same halves of the lights), so a region Lambert
+  // predicts clearly better (kPixelModelSignificance) — dark, or matte on a glossy object — is
+  // Lambertian.
   bool per_pixel_model = true;
   // Fit the normal to all three channels (each with its own coefficients). Off: to their
   // luminance, exact under the model and about twice as fast, a little less accurate on photos.

@@ -250,8 +250,10 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
 
 HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, const double* y,
                             const double* usable, const int* fold, double t,
-                            std::vector<double>& buffer, bool near_last, HeldOutRefiner* refiner) {
+                            std::vector<double>& buffer, bool near_last, HeldOutRefiner* refiner,
+                            double* per_light) {
   const int k = table.lights();
+  if (per_light) std::fill(per_light, per_light + k, 0.0);
   const int folds = 1 + *std::max_element(fold, fold + k);
   buffer.resize(k);
   HeldOutResult out;
@@ -268,7 +270,9 @@ HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, c
     for (int j = 0; j < k; ++j) {
       if (fold[j] != f || usable[j] == 0) continue;
       const double predicted = refiner ? refiner->Predicted(j) : r.kd * d[j] + r.ks * s[j];
-      out.cost += internal::CensoredCost(y[j] - predicted, t) / (t * t);
+      const double cost = internal::CensoredCost(y[j] - predicted, t) / (t * t);
+      out.cost += cost;
+      if (per_light) per_light[j] = cost;
     }
   }
   return out;

@@ -150,6 +150,6 @@ struct HeldOutResult {
 HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, const double* y,
                             const double* usable, const int* fold, double t,
                             std::vector<double>& buffer, bool near_last = false,
-                            HeldOutRefiner* refiner = nullptr);
+                            HeldOutRefiner* refiner = nullptr, double* per_light = nullptr);
 
 }  // namespace iphong::solve
