@@ -147,6 +147,8 @@ struct HeldOutResult {
   Vec3d normal[2] = {Vec3d::Zero(), Vec3d::Zero()};
 };
 // `near_last`: the halves searched near the last full search of `search` (NormalSearch::Search).
+// `per_light` (K, or nullptr): each light's own held-out cost, 0 where it is not usable, for a
+// paired comparison of two models on the same lights (PairedDifference).
 HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, const double* y,
                             const double* usable, const int* fold, double t,
                             std::vector<double>& buffer, bool near_last = false,
