@@ -41,7 +41,8 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     mask: (H, W) bool (numpy or dask) or None (every pixel). Returns a dict: normals, albedo,
     specular (H, W, 3), residual, model_map (H, W) as lazy dask arrays with the images' chunks;
     model, shininess, ambient_term and the plan (decided now, on the plan sample); ks, a lazy
-    (3,) array: the median ks of the plan sample's solved pixels, as estimate_normals reports it.
+    (3,) array: the median ks of the plan sample's solved pixels that kept the lobe, as
+    estimate_normals reports it.
     Raises ValueError for inconsistent shapes or chunks over K or the colour axis.
     """
     import dask

@@ -106,7 +106,7 @@ struct NormalResult {
   ImageF specular;  // 3 channels, each pixel's ks; empty for lambert
   ImageF residual;  // 1 channel: RMS model residual per pixel; −1 where no normal was found
   reflectance::Lobe model = reflectance::Lobe::kPhong;  // the lobe used
-  Vec3d ks = Vec3d::Zero();                             // known, or the median of the pixels' ks
+  Vec3d ks = Vec3d::Zero();  // known, or the median ks of the pixels that kept the lobe
   double shininess = 1;
   Vec3d ambient_term = Vec3d::Zero();  // Ia ⊙ ka (known; 0 when estimated)
   double code_offset = 0;              // NormalOptions::code_offset, as used
@@ -143,7 +143,8 @@ PhotometricData SubsetObservations(const PhotometricData& data,
 void AppendObservations(PhotometricData& to, const PhotometricData& from,
                         const std::vector<std::size_t>& indices, std::size_t pixel_offset);
 // Appends the specular coefficients of the solved pixels among `indices` (positions in data's
-// order) of a result of SolveNormalsWithPlan on `data`: what FinishNormals takes.
+// order) of a result of SolveNormalsWithPlan on `data` that kept the lobe (model_map 1, when
+// there is a map): what FinishNormals takes.
 void AppendSampleSpecular(const NormalResult& result, const PhotometricData& data,
                           const std::vector<std::size_t>& indices, std::vector<Vec3f>& ks);
 // Whether PlanNormals decides anything from the sample: not for Woodham nor known coefficients.
@@ -165,7 +166,8 @@ NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& optio
 NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan& plan);
 
 // Fills the whole-object summaries: ks is the per-channel median of the specular coefficients
-// of the solved plan-sample pixels (`sample_ks`, one per such pixel); known ks when known.
+// of the solved plan-sample pixels that kept the lobe (`sample_ks`, one per such pixel,
+// AppendSampleSpecular); known ks when known.
 void FinishNormals(NormalResult& result, const NormalPlan& plan,
                    const std::vector<Vec3f>& sample_ks);
 
