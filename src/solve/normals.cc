@@ -385,7 +385,7 @@ void FinishNormals(NormalResult& result, const NormalPlan& plan,
     result.ks = MedianKs(sample_ks);
     result.specular_note =
         specular ? "model chosen by held-out prediction (" + plan.model_choice.note +
-                       "); ks per pixel in specular.exr, this is their median"
+                       "); ks per pixel in specular.exr, this is the median where the lobe was kept"
                  : "no specular model predicts held-out observations better than Lambert's (" +
                        plan.model_choice.note + ")";
   }
