@@ -283,8 +283,7 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
           for (int j = 0; j < data.images; ++j) {
             if (fitter.usable()[j] != 0) lobe_peak = std::max(lobe_peak, r.ks * lobe[j]);
           }
-          bool lambert_wins =
-              lobe_peak <= kNegligibleLobe * fitter.threshold() / o.shadow_threshold;
+          bool lambert_wins = lobe_peak <= kNegligibleLobe * fitter.brightness();
           if (!lambert_wins) {
             lambert_search->NearTheLastOf(search);
             HeldOutSearch(*lambert_search, *lambert_table, fitter.luminance(), fitter.usable(),

@@ -119,7 +119,7 @@ struct PixelFitter::State {
   std::vector<double> saved_usable;  // usable outside a fold's fit
   const float* obs = nullptr;
   Vec3d fitted_albedo = Vec3d::Zero(), fitted_specular = Vec3d::Zero();  // the last Fit's
-  double threshold = 0;
+  double brightness = 0, threshold = 0;
   bool dark = false;
 
   State(const PhotometricData& d, const PixelFitSettings& s) : data(d), settings(s) {
@@ -211,6 +211,7 @@ PixelFitter::~PixelFitter() = default;
 const double* PixelFitter::luminance() const { return state_->y_lum.data(); }
 const double* PixelFitter::usable() const { return state_->usable.data(); }
 double PixelFitter::threshold() const { return state_->threshold; }
+double PixelFitter::brightness() const { return state_->brightness; }
 bool PixelFitter::dark() const { return state_->dark; }
 
 bool PixelFitter::Prepare(std::size_t p) {
@@ -234,7 +235,8 @@ bool PixelFitter::Prepare(std::size_t p) {
   // Dark as recorded: with a code offset or below the ambient term every value may be nonzero.
   st.dark = !(brightest > 1e-8) || !(*std::max_element(st.y_lum.begin(), st.y_lum.end()) > 1e-8);
   if (st.bright.size() < 3 || st.dark) return false;
-  st.threshold = st.settings.shadow_threshold * internal::BrightnessScale(st.bright);
+  st.brightness = internal::BrightnessScale(st.bright);
+  st.threshold = st.settings.shadow_threshold * st.brightness;
   st.model.y = st.model.channels == 1 ? st.y_lum.data() : st.y_rgb.data();
   return true;
 }

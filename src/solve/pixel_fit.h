@@ -49,10 +49,12 @@ class PixelFitter {
   // (dark() tells which): nothing to fit.
   bool Prepare(std::size_t p);
   bool dark() const;
-  // After Prepare: the luminance observations, their usability (0/1) and the censoring
-  // threshold t, for the search.
+  // After Prepare: the luminance observations, their usability (0/1), the pixel's brightness
+  // (internal::BrightnessScale of its usable luminances) and the censoring threshold t (a
+  // fraction of it), for the search.
   const double* luminance() const;
   const double* usable() const;
+  double brightness() const;
   double threshold() const;
 
   // Refines s.normal (unit, the start) in place and sets the albedo, ks, residual (RMS of the
