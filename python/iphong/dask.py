@@ -102,13 +102,9 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     out["plan"] = plan
 
     def median_ks(specular, residual, model_map):
-        # With the per-pixel test (when the C++ solver makes its model map) only the pixels
-        # that kept the lobe (1) count: Lambert's have ks 0 by choice, as in the C++ solver.
-        o = plan["options"]
-        per_pixel = (o["per_pixel_model"] and not o["material_known"] and o["model"] != "lambert"
-                     and len(plan["fold"]) > 0)
-        used = (residual >= 0) & ((model_map == 1) if per_pixel else True)
-        solved = specular[used]
+        # The pixels the per-pixel test gave to Lambert (model_map 0) have ks 0 by choice: left
+        # out, as by the C++ solver.
+        solved = specular[(residual >= 0) & (model_map != 0)]
         if plan["options"]["material_known"]:
             return _np.asarray(plan["options"]["ks"])
         if solved.size == 0 or plan["options"]["model"] == "lambert":

@@ -415,33 +415,23 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
     }
   }
   // Prediction first; among the models whose held-out cost is not distinguishable from the
-  // lowest (paired over the same pixels, within one standard error), the one whose two halves
-  // agree best on the normal: two models can predict the images equally well while one of them
-  // leaves the normal less determined.
+  // lowest (paired over the same pixels, within one standard error), Lambert if it is one of
+  // them — a specular model is used only where it predicts better (a matte object's lobes all
+  // fit ks ≈ 0 and tie with it) — else the one whose two halves agree best on the normal: two
+  // models can predict the images equally well while one of them leaves the normal less
+  // determined.
   const std::size_t lowest_index = lowest();
+  const auto preferred = [&](std::size_t i, std::size_t j) {
+    const bool lambert_i = choice.scored[i].lobe == reflectance::Lobe::kLambert;
+    const bool lambert_j = choice.scored[j].lobe == reflectance::Lobe::kLambert;
+    if (lambert_i != lambert_j) return lambert_i;
+    return choice.scored[i].fold_angle_deg < choice.scored[j].fold_angle_deg;
+  };
   std::size_t pick = lowest_index;
   for (std::size_t i = 0; i < choice.scored.size(); ++i) {
     const auto [mean, error] =
         PairedDifference(costs[i].data(), costs[lowest_index].data(), costs[i].size());
-    if (mean <= error && choice.scored[i].fold_angle_deg < choice.scored[pick].fold_angle_deg) {
-      pick = i;
-    }
-  }
-  // A specular model is used only where it predicts better than Lambert: when Lambert's cost is
-  // not distinguishable from the lowest either (a matte object, whose lobes all fit ks ≈ 0 and
-  // predict exactly as Lambert does), Lambert it is.
-  std::optional<std::size_t> lambert_index;
-  for (std::size_t i = 0; i < choice.scored.size(); ++i) {
-    if (choice.scored[i].lobe == reflectance::Lobe::kLambert &&
-        (!lambert_index ||
-         choice.scored[i].heldout_cost < choice.scored[*lambert_index].heldout_cost)) {
-      lambert_index = i;
-    }
-  }
-  if (lambert_index) {
-    const auto [mean, error] = PairedDifference(
-        costs[*lambert_index].data(), costs[lowest_index].data(), costs[lowest_index].size());
-    if (mean <= error) pick = *lambert_index;
+    if (mean <= error && preferred(i, pick)) pick = i;
   }
   const ModelCandidate best = choice.scored[pick];
   choice.chosen = best;

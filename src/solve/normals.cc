@@ -121,7 +121,7 @@ void AppendSampleSpecular(const NormalResult& result, const PhotometricData& dat
     const std::size_t p = static_cast<std::size_t>(data.pixels[i]);
     if (result.residual.pixels[p] < 0) continue;
     // Where the pixel's own test gave it to Lambert its ks is 0 by choice, not a measurement.
-    if (!result.model_map.pixels.empty() && result.model_map.pixels[p] != 1) continue;
+    if (!result.model_map.pixels.empty() && result.model_map.pixels[p] == 0) continue;
     const float* v = result.specular.pixels.data() + 3 * p;
     ks.emplace_back(v[0], v[1], v[2]);
   }

@@ -143,8 +143,8 @@ PhotometricData SubsetObservations(const PhotometricData& data,
 void AppendObservations(PhotometricData& to, const PhotometricData& from,
                         const std::vector<std::size_t>& indices, std::size_t pixel_offset);
 // Appends the specular coefficients of the solved pixels among `indices` (positions in data's
-// order) of a result of SolveNormalsWithPlan on `data` that kept the lobe (model_map 1, when
-// there is a map): what FinishNormals takes.
+// order) of a result of SolveNormalsWithPlan on `data`, but those its per-pixel test gave to
+// Lambert (model_map 0): what FinishNormals takes.
 void AppendSampleSpecular(const NormalResult& result, const PhotometricData& data,
                           const std::vector<std::size_t>& indices, std::vector<Vec3f>& ks);
 // Whether PlanNormals decides anything from the sample: not for Woodham nor known coefficients.
