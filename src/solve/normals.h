@@ -106,7 +106,7 @@ struct NormalResult {
   ImageF specular;  // 3 channels, each pixel's ks; empty for lambert
   ImageF residual;  // 1 channel: RMS model residual per pixel; −1 where no normal was found
   reflectance::Lobe model = reflectance::Lobe::kPhong;  // the lobe used
-  Vec3d ks = Vec3d::Zero();  // known, or the median ks of the pixels that kept the lobe
+  Vec3d ks = Vec3d::Zero();  // known, or the median ks of the pixels not given to Lambert
   double shininess = 1;
   Vec3d ambient_term = Vec3d::Zero();  // Ia ⊙ ka (known; 0 when estimated)
   double code_offset = 0;              // NormalOptions::code_offset, as used

@@ -210,7 +210,7 @@ TEST(Normals, EachPixelKeepsTheSpecularModelOnlyWhereItPredictsBetter) {
   const double glossy_share = specular[0] / count[0], matte_share = specular[1] / count[1];
   RecordProperty("glossy_share", std::to_string(glossy_share));
   RecordProperty("matte_share", std::to_string(matte_share));
-  EXPECT_LT(matte_share, 0.2);   // 0.15: where the lobe keeps a trace of weight, normals exact
+  EXPECT_LT(matte_share, 0.2);   // 0.14: where the lobe keeps a trace of weight, normals exact
   EXPECT_GT(glossy_share, 0.3);  // the lobe shows on part of the ball only
   EXPECT_LT(CompareNormals(r.normals, s.out.normal_cam, s.out.mask).mean_deg, 0.3);
   // Where no light comes near a pixel's lobe, free least squares scaled the lobe's far tail up
@@ -259,7 +259,8 @@ TEST(Normals, NoiseAloneDoesNotHandPixelsToLambert) {
       "one glossy material, sigma 0.01: %.3f deg per pixel, %.3f object-wide, %.1f %% "
       "Lambert\n",
       per_pixel, whole, 100 * lambert / count);
-  // 2 % more error than object-wide when any lower held-out cost decides (0.247° against 0.242°).
+  // 2 % more error than object-wide when any lower held-out cost decides (0.247° against
+  // 0.242°); 0.244° at one standard error.
   EXPECT_LT(per_pixel, 1.01 * whole);
 }
 
