@@ -308,7 +308,8 @@ void AddCalibrateCommand(CLI::App& app) {
       ->check(CLI::Range(1, 2))
       ->capture_default_str();
   cmd->add_option("--saturation", o->saturation,
-                  "Values at or above this are clipped (images read as 0-1)")
+                  "Values at or above this are clipped (images read as 0-1; at most 1: not where a "
+                  "float image passes 1)")
       ->check(Positive())
       ->capture_default_str();
   cmd->add_option("--mask", o->capture.options.mask,

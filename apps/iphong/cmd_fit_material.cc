@@ -419,7 +419,8 @@ void AddFitMaterialCommand(CLI::App& app) {
       ->check(CLI::Range(1, 100000000))
       ->capture_default_str();
   cmd->add_option("--saturation", o->saturation,
-                  "Observations with a channel at or above this are unused")
+                  "Observations with a channel at or above this are unused (at most 1: not in "
+                  "pixels whose float values pass 1)")
       ->check(Positive())
       ->capture_default_str();
   cmd->add_option("--shadow-threshold", o->shadow_threshold,

@@ -2,6 +2,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "calibrate/lights.h"
@@ -64,6 +65,20 @@ KnownNormalCalibration CalibrateFromNormals(const std::vector<const ImageF*>& im
   auto at = [count](std::size_t i, int j) { return std::size_t(j) * count + i; };
   std::vector<float> rgb(count * k * 3), luminance(count * k);
   std::vector<unsigned char> clipped(count * k);
+  // Each pixel's clip level (solve::PixelSaturation): a pixel with a value above 1 comes from a
+  // floating-point capture that was not clipped at 1.
+  std::vector<double> level(count, options.saturation);
+  if (options.saturation <= 1) {
+    for (int j = 0; j < k; ++j) {
+      const ImageF& image = *images[j];
+      for (std::size_t i = 0; i < count; ++i) {
+        const float* v = image.pixels.data() + index[i] * image.channels;
+        for (int c = 0; c < image.channels && c < 3; ++c) {
+          if (v[c] > 1) level[i] = std::numeric_limits<double>::infinity();
+        }
+      }
+    }
+  }
   for (int j = 0; j < k; ++j) {
     const ImageF& image = *images[j];
     for (std::size_t i = 0; i < count; ++i) {
@@ -72,7 +87,7 @@ KnownNormalCalibration CalibrateFromNormals(const std::vector<const ImageF*>& im
       for (int c = 0; c < 3; ++c) {
         const float x = v[std::min(c, image.channels - 1)];
         rgb[at(i, j) * 3 + c] = x;
-        clip |= !(x < options.saturation);
+        clip |= !(x < level[i]);
       }
       clipped[at(i, j)] = clip;
       luminance[at(i, j)] = (rgb[at(i, j) * 3] + rgb[at(i, j) * 3 + 1] + rgb[at(i, j) * 3 + 2]) / 3;

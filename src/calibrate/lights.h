@@ -148,7 +148,8 @@ MirrorCalibration CalibrateMirror(const std::vector<const ImageF*>& images,
 
 struct KnownNormalOptions {
   bool uniform_albedo = false;  // a calibration sphere: one albedo; else one per pixel
-  double saturation = 1.0;      // observations at or above are clipped and left out
+  double saturation = 1.0;      // observations at or above are clipped and left out; at most 1,
+                                // not in a pixel with values above 1 (HDR: none clipped there)
   double min_cos = 0.2;         // observations used only where N·L exceeds this (attached shadow)
   int rounds = 50;              // alternations between albedo and lights
   double tolerance = 1e-5;      // stop when no direction moves more than this (radians, 0.0006°)

@@ -2,6 +2,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
@@ -88,7 +89,12 @@ Highlight FindHighlight(const ImageF& image, const SphereGeometry& sphere,
     }
   }
 
-  const double top = std::min(peak, options.saturation);
+  // A level of at most 1 is the top of [0, 1] data; a sphere whose values pass 1 is a float
+  // capture that was not clipped there (as solve::PixelSaturation decides per pixel).
+  const double saturation = options.saturation <= 1 && peak > 1
+                                ? std::numeric_limits<double>::infinity()
+                                : options.saturation;
+  const double top = std::min(peak, saturation);
   const double t = options.threshold * top;
   const cv::Mat above = value >= t;
   cv::Mat labels, stats, centroids;
@@ -128,7 +134,7 @@ Highlight FindHighlight(const ImageF& image, const SphereGeometry& sphere,
       sum_x += w * x;
       sum_y += w * y;
       ++h.pixels;
-      h.saturated_pixels += v >= options.saturation;
+      h.saturated_pixels += v >= saturation;
     }
   }
   if (h.pixels == 0 || sum_dir.norm() == 0) {

@@ -55,7 +55,7 @@ struct MaterialFitOptions {
   AlbedoMode albedo = AlbedoMode::kPerPixel;
   // kPerRegion: a label ≥ 0 per pixel of the observations (data.pixels order); −1 = left out.
   std::vector<int> region;
-  double saturation = 0.995;      // observations with a channel at or above: unused
+  double saturation = 0.995;      // a channel at or above: unused (solve::PixelSaturation)
   double shadow_threshold = 0.1;  // censoring, as solve::NormalOptions::shadow_threshold
   int folds = 2;                  // model choice: interleaved folds of the lights (≥ 2)
   // Pixels the shared coefficients are fitted to: an even sample (every k-th), kd then solved

@@ -10,6 +10,7 @@
 #include "core/parallel.h"
 #include "material/internal.h"
 #include "solve/internal.h"
+#include "solve/photometric_data.h"
 
 namespace iphong::material::internal {
 
@@ -81,6 +82,7 @@ void FillFactors(Sample& s, double saturation, double shadow_threshold, int thre
     for (std::size_t p = b; p < e; ++p) {
       const Vec3d normal = s.normal[p];
       for (auto& v : values) v.clear();
+      const double level = solve::PixelSaturation(s.y(p, 0), 3 * std::size_t(k), saturation);
       for (int j = 0; j < k; ++j) {
         const std::size_t i = p * k + j;
         const Vec3d& light = data.light_directions[j];
@@ -92,7 +94,7 @@ void FillFactors(Sample& s, double saturation, double shadow_threshold, int thre
         s.cos_blinn[i] = reflectance::SpecularLobe(normal, view, light, 1.0, blinn);
         const float* y = s.y(p, j);
         bool ok = true;
-        for (int ch = 0; ch < 3; ++ch) ok = ok && std::isfinite(y[ch]) && y[ch] < saturation;
+        for (int ch = 0; ch < 3; ++ch) ok = ok && std::isfinite(y[ch]) && y[ch] < level;
         s.usable[i] = ok;
         if (ok) {
           for (int ch = 0; ch < 3; ++ch) values[ch].push_back(y[ch]);

@@ -35,7 +35,9 @@ struct NormalOptions {
   // Woodham: fractions of each pixel's observations dropped, darkest and brightest first.
   double discard_dark = 0.3;
   double discard_bright = 0.1;
-  // Observations with a channel at or above this value are treated as saturated and unused.
+  // Observations with a channel at or above this value are treated as saturated and unused; at
+  // most 1, only in pixels whose values stay within 1 (PixelSaturation: a float capture with
+  // values above 1 was not clipped there).
   double saturation = 0.995;
   // Shadow censoring: an observation darker than the model by more than this fraction of the
   // pixel's brightness costs no more (internal::CensoredCost). Noise is ~1% of the brightness,

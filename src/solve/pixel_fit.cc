@@ -220,9 +220,10 @@ bool PixelFitter::Prepare(std::size_t p) {
   st.obs = st.data.pixel(p);
   st.bright.clear();
   double brightest = 0;
+  const double saturation = PixelSaturation(st.obs, 3 * std::size_t(k), st.settings.saturation);
   for (int j = 0; j < k; ++j) {
     const Vec3d rgb(st.obs[3 * j], st.obs[3 * j + 1], st.obs[3 * j + 2]);
-    const bool saturated = rgb.maxCoeff() >= st.settings.saturation;
+    const bool saturated = rgb.maxCoeff() >= saturation;
     st.usable[j] = saturated ? 0.0 : 1.0;
     brightest = std::max(brightest, internal::Luminance(rgb));
     const Vec3d code =

@@ -31,7 +31,7 @@ struct PixelFitSettings {
   // Added to every nonzero channel of an observation before anything else: half a code step
   // when the images were truncated to integer codes (NormalOptions::code_offset).
   double code_offset = 0;
-  double saturation = 0.995;      // a channel at or above: the observation is not used
+  double saturation = 0.995;      // a channel at or above: unused (PixelSaturation)
   double shadow_threshold = 0.1;  // t as a fraction of the pixel's brightness
   int rounds = 4;                 // reweighting rounds
   int max_iterations = 10;        // per round

@@ -309,7 +309,8 @@ TEST(CalibrateMirror, ClippedHighlightsGiveDirectionsButNoIntensities) {
   const std::vector<Vec3d> truth = SpiralLights(12, 60);
   std::vector<Light> lights;
   for (const Vec3d& l : truth) lights.push_back(Light::Directional(l, Rgb::Ones()));
-  Capture c = ShadeEach(surface, camera, bright, lights);
+  const Capture hdr = ShadeEach(surface, camera, bright, lights);
+  Capture c = hdr;
   for (ImageF& image : c.images)
     for (float& v : image.pixels) v = std::min(v, 1.0f);
   const MirrorCalibration result = CalibrateMirror(c.pointers(), Spheres(c.mask), {});
@@ -320,6 +321,15 @@ TEST(CalibrateMirror, ClippedHighlightsGiveDirectionsButNoIntensities) {
   }
   EXPECT_FALSE(result.intensities_measured);
   EXPECT_EQ(result.light_intensities[3], Rgb::Ones());
+  // The same highlights as floats up to 4, not clipped: nothing saturated, intensities measured.
+  const MirrorCalibration unclipped = CalibrateMirror(hdr.pointers(), Spheres(hdr.mask), {});
+  ASSERT_TRUE(unclipped.failed.empty());
+  for (std::size_t j = 0; j < truth.size(); ++j) {
+    EXPECT_EQ(unclipped.highlights[j][0].saturated_pixels, 0);
+    EXPECT_LT(AngleDeg(unclipped.light_dir_cam[j], truth[j]), 0.1);
+  }
+  EXPECT_TRUE(unclipped.intensities_measured);
+  EXPECT_LT(WorstIntensityError(unclipped.light_intensities, lights), 0.01);
 }
 
 TEST(CalibrateFromNormals, MatteSphereDirectionsWithinATenthAndIntensitiesWithinHalfAPercent) {
@@ -332,6 +342,28 @@ TEST(CalibrateFromNormals, MatteSphereDirectionsWithinATenthAndIntensitiesWithin
   const Capture c = ShadeEach(surface, camera, matte, lights);
   Mask on_sphere;
   const ImageF normals = SphereNormalMap(Spheres(c.mask), 200, 200, &on_sphere);
+  KnownNormalOptions options;
+  options.uniform_albedo = true;
+  const KnownNormalCalibration result =
+      CalibrateFromNormals(c.pointers(), normals, on_sphere, options);
+  for (std::size_t j = 0; j < truth.size(); ++j)
+    EXPECT_LT(AngleDeg(result.light_dir_cam[j], truth[j]), 0.1) << j;
+  EXPECT_LT(WorstIntensityError(result.light_intensities, lights), 0.005);
+}
+
+// The same sphere as a float capture ten times as bright: values up to 10 are data, not clipping
+// (solve::PixelSaturation): directions and relative intensities come back as exactly as at 1.
+TEST(CalibrateFromNormals, FloatCaptureBrighterThanOneIsNotClipped) {
+  const Camera camera = Camera::Orthographic(120, 120, 2.0);
+  const geometry::SurfaceMap surface = geometry::SampleSphere(camera, Vec3d::Zero(), 0.8);
+  Material matte;
+  matte.kd = Vec3d(0.7, 0.6, 0.5);
+  const std::vector<Vec3d> truth = SpiralLights(16, 70);
+  std::vector<Light> lights = RandomLights(truth, 7, 0.5, 1.5);
+  for (Light& light : lights) light.diffuse_intensity *= 10;
+  const Capture c = ShadeEach(surface, camera, matte, lights);
+  Mask on_sphere;
+  const ImageF normals = SphereNormalMap(Spheres(c.mask), 120, 120, &on_sphere);
   KnownNormalOptions options;
   options.uniform_albedo = true;
   const KnownNormalCalibration result =

@@ -47,6 +47,19 @@ def test_unknown_material_is_estimated():
     assert e < 0.5 < w
 
 
+def test_float_images_brighter_than_one_are_data_not_clipping():
+    """Float arrays passing 1 (an HDR capture) were not clipped at 1: the same normals as the same
+    images at unit scale. Before, every value above 0.995 was left out (4 degrees and more)."""
+    out = iphong.render(SCENE, per_light=True)
+    args = (out["light_directions"], out["light_intensities"], out["mask"])
+    unit = iphong.estimate_normals(out["images"], *args, material=dict(MATERIAL, ambient=1.0))
+    bright = iphong.estimate_normals(out["images"] * 10, *args,
+                                     material=dict(MATERIAL, ambient=10.0, ks=4.0))
+    for r in (unit, bright):
+        assert iphong.angular_error(r["normals"], out["normals"], out["mask"])["mean_angular_error_deg"] < 0.01
+    np.testing.assert_allclose(bright["albedo"][out["mask"]], 10 * unit["albedo"][out["mask"]], rtol=1e-3)
+
+
 def test_bad_arrays_raise_value_error():
     images = np.zeros((4, 8, 8, 3), np.float32)
     lights = np.tile([0.0, 0.0, 1.0], (4, 1))

@@ -2,7 +2,9 @@
 // bad input. The model choice and the search have their own files.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "geometry/primitives.h"
 #include "render/renderer.h"
@@ -205,6 +207,51 @@ TEST(Normals, PixelsDarkInEveryImageAreFlaggedNotNan) {
   EXPECT_EQ(r.normals.pixels[3 * p + 2], 1.0f);
   for (float v : r.normals.pixels) ASSERT_TRUE(std::isfinite(v));
   for (float v : r.albedo.pixels) ASSERT_TRUE(std::isfinite(v));
+}
+
+// A pixel's values reach 1 and stop there when the capture clipped at the top of its range
+// (integer codes): those observations say only "at least this bright" and are left out. A float
+// capture whose values pass 1 was not clipped there, and every value counts (PixelSaturation).
+TEST(Normals, ClippedAtOneLeftOutButFloatValuesAboveOneAreData) {
+  EXPECT_EQ(PixelSaturation(std::vector<float>{0.2f, 1.0f}.data(), 2, 0.995), 0.995);
+  EXPECT_TRUE(std::isinf(PixelSaturation(std::vector<float>{0.2f, 1.5f}.data(), 2, 0.995)));
+  EXPECT_EQ(PixelSaturation(std::vector<float>{0.2f, 5.0f}.data(), 2, 4.0), 4.0);
+
+  const auto m = Plastic();
+  const Synthetic s = MakeSphereData(m, 24, 0.0, Vec3d::Zero(), 64);
+  auto scaled = [&](double factor, double clip) {
+    PhotometricData d = s.data;
+    for (float& v : d.values) v = static_cast<float>(std::min(v * factor, clip));
+    return d;
+  };
+  auto error = [&](const PhotometricData& d, NormalOptions o) {
+    return CompareNormals(EstimateNormals(d, o).normals, s.out.normal_cam, s.out.mask).mean_deg;
+  };
+  // Exposed 2.5 times brighter and clipped at 1: 20 % of the observations are clipped.
+  const PhotometricData clipped = scaled(2.5, 1.0);
+  std::size_t at_one = 0;
+  for (float v : clipped.values) at_one += v >= 1.0f;
+  EXPECT_GT(at_one, clipped.values.size() / 20);
+  NormalOptions known = Known(m, Vec3d::Zero());
+  known.ks *= 2.5;
+  EXPECT_LE(error(clipped, known), 0.01);
+  NormalOptions unclipped = known;
+  unclipped.saturation = 1e30;  // the clipped values taken as measured
+  EXPECT_GT(error(clipped, unclipped), 0.5);
+
+  // The same render as floats ten times brighter, nothing clipped: as exact as at 1, with
+  // known and with estimated coefficients (before, every value above 0.995 was left out: 35°).
+  const PhotometricData bright = scaled(10, 1e30);
+  known.ks = 10 * m.ks;
+  EXPECT_LE(error(bright, known), 0.01);
+  NormalOptions estimated;
+  estimated.model_sample = 150;  // the choice's cost; a sphere's lobe needs few pixels
+  const double at_unit = error(s.data, estimated);
+  const double at_ten = error(bright, estimated);
+  RecordProperty("estimated_mean_deg_x1", std::to_string(at_unit));
+  RecordProperty("estimated_mean_deg_x10", std::to_string(at_ten));
+  EXPECT_LE(at_unit, 0.1);
+  EXPECT_NEAR(at_ten, at_unit, 0.02);
 }
 
 TEST(Normals, BadInputGivesOneLineMessages) {
