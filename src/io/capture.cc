@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <stdexcept>
 
@@ -294,6 +295,26 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
     for (const std::string& name : c.names) c.paths.push_back((dir / name).string());
   }
   if (c.paths.empty()) Fail(dir, "holds no images");  // every reader above needs at least one
+  // One image under two lights is a slip in the list (the same line pasted twice): the run goes
+  // on, as the observations are still valid for one of the lights, but says so.
+  {
+    std::map<std::string, int> seen;
+    for (const std::string& path : c.paths) ++seen[fs::path(path).lexically_normal().string()];
+    int repeated = 0;
+    std::string example;
+    for (std::size_t j = 0; j < c.paths.size(); ++j) {
+      const int n = seen[fs::path(c.paths[j]).lexically_normal().string()];
+      if (n > 1 && example.empty()) example = c.names[j] + " " + std::to_string(n) + " times";
+      repeated += n > 1;
+    }
+    if (repeated > 0) {
+      c.warnings.push_back((c.layout == "folder" ? dir : dir / c.order).string() + ": lists " +
+                           example + " (" + std::to_string(repeated) + " of " +
+                           std::to_string(c.paths.size()) +
+                           " entries name an image listed more than once): each light needs its "
+                           "own photograph");
+    }
+  }
 
   // Intensities.
   fs::path intensities = options.intensities;

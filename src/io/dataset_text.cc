@@ -147,6 +147,18 @@ void NormalizeDirections(std::vector<Vec3d>& directions, const std::string& sour
     d = (d / scale).normalized();
   }
   if (std::string m = solve::CheckLightSpan(directions); !m.empty()) Fail(source, m);
+  // A light behind the surface's plane as seen from the camera reaches only what faces away from
+  // it: a few such lights are a rim setup, most of them a file in another frame (OpenCV's and
+  // many renderers': y down, z into the scene), which gives normals turned inside out.
+  std::size_t behind = 0;
+  for (const Vec3d& d : directions) behind += d.z() < 0;
+  if (warnings && 2 * behind > directions.size()) {
+    warnings->push_back(source + ": " + std::to_string(behind) + " of " +
+                        std::to_string(directions.size()) +
+                        " light directions point away from the camera (z < 0); iphong's frame "
+                        "has x right, y up, z toward the camera: a file with y down and z into "
+                        "the scene needs y and z negated");
+  }
 }
 
 bool EndsWith(std::string text, const std::string& suffix) {

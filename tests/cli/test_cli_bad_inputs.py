@@ -336,6 +336,36 @@ def test_warnings_do_not_hide_errors_and_stdout_holds_the_report(rendered, tmp_p
     assert "Angular error against the ground truth" in out
 
 
+def test_lights_in_a_y_down_z_into_the_scene_frame_are_named(rendered, tmp_path):
+    """Every light behind the camera's side of the object: a file in another frame. It still runs
+    (a rim-lit capture has a few such lights) but says so, instead of normals 86 degrees off
+    without a word."""
+    ds = user_copy(rendered, tmp_path / "ds")
+    lines = (ds / "light_directions.txt").read_text().splitlines()
+    flipped = [f"{x} {-float(y)} {-float(z)}" for x, y, z in (line.split() for line in lines)]
+    (ds / "light_directions.txt").write_text("\n".join(flipped) + "\n")
+    code, _, err = run("normals", ds, "-o", tmp_path / "out")
+    assert code == 0, err
+    assert err.splitlines() == [
+        f"iphong: warning: {ds}/light_directions.txt: 12 of 12 light directions point away from "
+        "the camera (z < 0); iphong's frame has x right, y up, z toward the camera: a file with "
+        "y down and z into the scene needs y and z negated"]
+    code, _, err = run("normals", rendered, "-o", tmp_path / "plain")
+    assert code == 0 and "point away" not in err
+
+
+def test_an_image_listed_for_two_lights_is_named(rendered, tmp_path):
+    ds = user_copy(rendered, tmp_path / "ds")
+    lines = (ds / "filenames.txt").read_text().splitlines()
+    lines[5] = lines[4]  # a line pasted twice: 005.png under lights 5 and 6
+    (ds / "filenames.txt").write_text("\n".join(lines) + "\n")
+    code, _, err = run("normals", ds, "-o", tmp_path / "out")
+    assert code == 0, err
+    assert err.splitlines() == [
+        f"iphong: warning: {ds}/filenames.txt: lists 005.png 2 times (2 of 12 entries name an "
+        "image listed more than once): each light needs its own photograph"]
+
+
 def test_text_files_from_windows_editors_are_read(rendered, tmp_path):
     """A UTF-8 byte-order mark and CRLF line ends are what Notepad writes: not an error."""
     ds = user_copy(rendered, tmp_path / "ds")
