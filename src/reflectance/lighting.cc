@@ -36,12 +36,14 @@ Light Light::Directional(const Vec3d& direction_cam, const Rgb& diffuse_intensit
   light.type = LightType::kDirectional;
   light.diffuse_intensity = diffuse_intensity;
   light.specular_intensity = specular_intensity;
-  const double norm = direction_cam.norm();
-  if (!direction_cam.allFinite() || !(norm > 1e-12)) {
+  // Scaled by the largest component first: 1e308 components have a direction, not an infinite
+  // norm (which divided them to zero).
+  const double scale = direction_cam.cwiseAbs().maxCoeff();
+  if (!direction_cam.allFinite() || !(scale > 0)) {
     throw std::invalid_argument("light direction must be finite and non-zero, got " +
                                 Format(direction_cam));
   }
-  light.direction_cam = direction_cam / norm;
+  light.direction_cam = (direction_cam / scale).normalized();
   ThrowIf(light.Validate());
   return light;
 }

@@ -88,6 +88,11 @@ TEST(LightValidation, DirectionIsNormalizedAndZeroOrNanRejected) {
   const Light light = Light::Directional(Vec3d(0, 0, 5), Vec3d::Ones());
   EXPECT_EQ(light.direction_cam, Vec3d(0, 0, 1));
   EXPECT_THROW(Light::Directional(Vec3d::Zero(), Vec3d::Ones()), std::invalid_argument);
+  // Huge and tiny components still have a direction.
+  EXPECT_NEAR(Light::Directional(Vec3d(1e308, 1e308, 1e308), Vec3d::Ones()).direction_cam.z(),
+              1 / std::sqrt(3.0), 1e-15);
+  EXPECT_NEAR(Light::Directional(Vec3d(0, 3e-300, 4e-300), Vec3d::Ones()).direction_cam.z(), 0.8,
+              1e-15);
   EXPECT_THROW(Light::Directional(Vec3d(std::nan(""), 0, 1), Vec3d::Ones()), std::invalid_argument);
   EXPECT_THROW(Light::Directional(Vec3d(0, 0, 1), Vec3d(1, -1, 1)), std::invalid_argument);
   EXPECT_THROW(Light::Point(Vec3d(0, std::nan(""), 0), Vec3d::Ones(), true), std::invalid_argument);
