@@ -105,6 +105,7 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
                                 " for " + std::to_string(data.pixel_count()) + " pixels");
   }
   std::vector<Vec3d> normals(normals_cam.size(), Vec3d::Zero());
+  std::size_t given = 0, back_facing = 0;
   for (std::size_t p = 0; p < normals_cam.size(); ++p) {
     const Vec3d& n = normals_cam[p];
     if (!n.allFinite()) {
@@ -113,6 +114,15 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
                                   std::to_string(px / data.width) + ") is not finite");
     }
     if (n.squaredNorm() > 0) normals[p] = n.normalized();
+    given += n.squaredNorm() > 0;
+    back_facing += n.squaredNorm() > 0 && !(n.z() > 0);
+  }
+  // A visible surface faces the camera (nz > 0); a few pixels at the rim may not, most of them
+  // mean a normal map in another frame, and the fit would explain the photos with ambient alone.
+  if (2 * back_facing > given) {
+    throw std::invalid_argument(std::to_string(back_facing) + " of " + std::to_string(given) +
+                                " normals face away from the camera (nz <= 0): a normal map in "
+                                "another frame (z into the scene?)");
   }
   const int k = data.images;
   if (std::string m = CheckLightCount(k, options); !m.empty()) throw std::invalid_argument(m);

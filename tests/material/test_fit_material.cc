@@ -304,6 +304,16 @@ TEST(FitMaterial, BadInputIsOneLine) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("not finite"), std::string::npos) << e.what();
   }
+  // A normal map in another frame (z into the scene): named, not fitted as ambient light.
+  normals = c.normals;
+  for (Vec3d& n : normals) n.z() = -n.z();
+  try {
+    FitMaterial(c.data, normals, {});
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("normals face away from the camera"), std::string::npos)
+        << e.what();
+  }
   std::fill(normals.begin(), normals.end(), Vec3d::Zero());
   EXPECT_THROW(FitMaterial(c.data, normals, {}), std::invalid_argument);
   // Three lights: Phong needs four.
