@@ -18,25 +18,15 @@ too large where no highlight constrains it.
 Usage: PYTHONPATH=build/python /usr/bin/python3 bench/diffuse_falloff.py [--no-normals]
 """
 import argparse
-import os
-import pathlib
 import sys
 
 import numpy as np
 
 import iphong
+from accuracy import DATA, objects  # every object with ground truth, named alike
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-DATA = pathlib.Path(os.environ.get("IPHONG_DATA_DIR", ROOT.parent / "shared" / "data"))
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 BANDS = np.round(np.arange(0.1, 1.0, 0.1), 1)
-
-
-def objects():
-    for group in ["diligent", "diligent-crop8"]:
-        for folder in sorted((DATA / group).glob("*")):
-            if (folder / "Normal_gt.mat").is_file():
-                yield f"{folder.name} ({'16-bit' if group == 'diligent' else '8-bit crop'})", folder
 
 
 def falloff(d, normal, valid):

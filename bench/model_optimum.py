@@ -57,13 +57,13 @@ DIFFUSE_POWER = 1.0  # --diffuse-power
 def basis(normals, light, term):
     """The term's factor for one light at each of normals (M, 3): the library's model."""
     model, n = term
-    if model == "lambert" and DIFFUSE_POWER != 1.0:
-        return np.maximum(normals @ np.asarray(light, np.float64), 0.0) ** DIFFUSE_POWER
     material = iphong.Material(kd=1.0 if model == "lambert" else 0.0,
                                ks=0.0 if model == "lambert" else 1.0, shininess=n)
     lights = [iphong.DirectionalLight(light)]
-    return iphong.shade(normals, material=material, lights=lights,
-                        model="phong" if model == "lambert" else model)[..., 0]
+    factor = iphong.shade(normals, material=material, lights=lights,
+                          model="phong" if model == "lambert" else model)[..., 0]
+    # --diffuse-power: the library's diffuse term max(0, N·L) raised to P.
+    return factor ** DIFFUSE_POWER if model == "lambert" else factor
 
 
 def nnls_cost(a, y, w):

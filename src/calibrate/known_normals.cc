@@ -2,12 +2,12 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
 
 #include "calibrate/lights.h"
 #include "core/parallel.h"
 #include "core/timing.h"
+#include "solve/photometric_data.h"
 
 namespace iphong::calibrate {
 namespace {
@@ -65,20 +65,17 @@ KnownNormalCalibration CalibrateFromNormals(const std::vector<const ImageF*>& im
   auto at = [count](std::size_t i, int j) { return std::size_t(j) * count + i; };
   std::vector<float> rgb(count * k * 3), luminance(count * k);
   std::vector<unsigned char> clipped(count * k);
-  // Each pixel's clip level (solve::PixelSaturation): a pixel with a value above 1 comes from a
-  // floating-point capture that was not clipped at 1.
-  std::vector<double> level(count, options.saturation);
-  if (options.saturation <= 1) {
-    for (int j = 0; j < k; ++j) {
-      const ImageF& image = *images[j];
-      for (std::size_t i = 0; i < count; ++i) {
-        const float* v = image.pixels.data() + index[i] * image.channels;
-        for (int c = 0; c < image.channels && c < 3; ++c) {
-          if (v[c] > 1) level[i] = std::numeric_limits<double>::infinity();
-        }
-      }
+  // Each pixel's clip level (solve::SaturationLevel) from its brightest value over the images.
+  std::vector<double> level(count, 0);
+  for (int j = 0; j < k; ++j) {
+    const ImageF& image = *images[j];
+    for (std::size_t i = 0; i < count; ++i) {
+      const float* v = image.pixels.data() + index[i] * image.channels;
+      for (int c = 0; c < std::min(image.channels, 3); ++c)
+        level[i] = std::max(level[i], double(v[c]));
     }
   }
+  for (double& l : level) l = solve::SaturationLevel(options.saturation, l);
   for (int j = 0; j < k; ++j) {
     const ImageF& image = *images[j];
     for (std::size_t i = 0; i < count; ++i) {

@@ -2,7 +2,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
@@ -10,6 +9,7 @@
 #include "core/parallel.h"
 #include "core/timing.h"
 #include "reflectance/phong.h"
+#include "solve/photometric_data.h"
 
 namespace iphong::calibrate {
 namespace {
@@ -89,11 +89,8 @@ Highlight FindHighlight(const ImageF& image, const SphereGeometry& sphere,
     }
   }
 
-  // A level of at most 1 is the top of [0, 1] data; a sphere whose values pass 1 is a float
-  // capture that was not clipped there (as solve::PixelSaturation decides per pixel).
-  const double saturation = options.saturation <= 1 && peak > 1
-                                ? std::numeric_limits<double>::infinity()
-                                : options.saturation;
+  // Per highlight: a sphere whose values pass 1 is a float capture not clipped there.
+  const double saturation = solve::SaturationLevel(options.saturation, peak);
   const double top = std::min(peak, saturation);
   const double t = options.threshold * top;
   const cv::Mat above = value >= t;

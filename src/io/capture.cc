@@ -298,16 +298,17 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
   // One image under two lights is a slip in the list (the same line pasted twice): the run goes
   // on, as the observations are still valid for one of the lights, but says so.
   {
-    std::map<std::string, int> seen;
-    for (const std::string& path : c.paths) ++seen[fs::path(path).lexically_normal().string()];
-    int repeated = 0;
-    std::string example;
-    for (std::size_t j = 0; j < c.paths.size(); ++j) {
-      const int n = seen[fs::path(c.paths[j]).lexically_normal().string()];
-      if (n > 1 && example.empty()) example = c.names[j] + " " + std::to_string(n) + " times";
-      repeated += n > 1;
+    std::map<std::string, std::vector<std::size_t>> entries;  // each image's places in the list
+    for (std::size_t j = 0; j < c.paths.size(); ++j)
+      entries[fs::path(c.paths[j]).lexically_normal().string()].push_back(j);
+    std::size_t repeated = 0, first = c.paths.size(), times = 0;
+    for (const auto& [path, at] : entries) {
+      if (at.size() < 2) continue;
+      repeated += at.size();
+      if (at[0] < first) first = at[0], times = at.size();
     }
     if (repeated > 0) {
+      const std::string example = c.names[first] + " " + std::to_string(times) + " times";
       c.warnings.push_back((c.layout == "folder" ? dir : dir / c.order).string() + ": lists " +
                            example + " (" + std::to_string(repeated) + " of " +
                            std::to_string(c.paths.size()) +

@@ -113,9 +113,10 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
       throw std::invalid_argument("the normal at pixel (" + std::to_string(px % data.width) + ", " +
                                   std::to_string(px / data.width) + ") is not finite");
     }
-    if (n.squaredNorm() > 0) normals[p] = n.normalized();
-    given += n.squaredNorm() > 0;
-    back_facing += n.squaredNorm() > 0 && !(n.z() > 0);
+    if (n.squaredNorm() == 0) continue;  // no normal: left out
+    normals[p] = n.normalized();
+    ++given;
+    back_facing += !(n.z() > 0);
   }
   // A visible surface faces the camera (nz > 0); a few pixels at the rim may not, most of them
   // mean a normal map in another frame, and the fit would explain the photos with ambient alone.

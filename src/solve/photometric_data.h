@@ -6,6 +6,7 @@
 // intensity of light j, L_j its unit direction (surface → light, camera frame), V = (0, 0, 1).
 #pragma once
 
+#include <algorithm>
 #include <limits>
 #include <string>
 #include <vector>
@@ -44,18 +45,22 @@ inline double AtCodeMiddle(double value, double offset) {
   return value > 0 ? value + offset : value;
 }
 
-// The level at or above which one pixel's recorded values (`count` floats) count as clipped. A
-// level of at most 1 is the top of data scaled to [0, 1] — integer codes, and float files made
-// from them — and applies while the pixel's values stay within it; a pixel with a value above 1
-// was not clipped at 1 (a floating-point, high-dynamic-range capture), so none of its values is
-// (infinity). A level above 1 is a caller's own and always applies. Decided per pixel so a
-// pixel's result depends on its own observations alone, whichever piece of the image it is in.
+// The level at or above which a pixel's recorded values count as clipped, given the brightest
+// of them. A level of at most 1 is the top of data scaled to [0, 1] — integer codes, and float
+// files made from them — and applies while the values stay within 1; values above 1 were not
+// clipped at 1 (a floating-point, high-dynamic-range capture), so none is (infinity). A level
+// above 1 is a caller's own and always applies. The one rule of the solver, the material fitter
+// and the light calibration.
+inline double SaturationLevel(double level, double brightest) {
+  return level <= 1 && brightest > 1 ? std::numeric_limits<double>::infinity() : level;
+}
+
+// SaturationLevel for one pixel's `count` recorded values. Decided per pixel so a pixel's result
+// depends on its own observations alone, whichever piece of the image it is in.
 inline double PixelSaturation(const float* values, std::size_t count, double level) {
-  if (level > 1) return level;
-  for (std::size_t i = 0; i < count; ++i) {
-    if (values[i] > 1) return std::numeric_limits<double>::infinity();
-  }
-  return level;
+  float brightest = 0;
+  for (std::size_t i = 0; i < count; ++i) brightest = std::max(brightest, values[i]);
+  return SaturationLevel(level, brightest);
 }
 
 // The observations' layout for K images: the masked pixels and the lights, values zeroed.
