@@ -64,6 +64,19 @@ Light Light::Point(const Vec3d& position_cam, const Rgb& diffuse_intensity,
   return light;
 }
 
+Light Light::Led(const Vec3d& position_cam, const Rgb& intensity, const Vec3d& axis_cam,
+                 double anisotropy) {
+  Light light = Point(position_cam, intensity, true);
+  const double scale = axis_cam.cwiseAbs().maxCoeff();
+  if (!axis_cam.allFinite() || !(scale > 0)) {
+    throw std::invalid_argument("light axis must be finite and non-zero, got " + Format(axis_cam));
+  }
+  light.axis_cam = (axis_cam / scale).normalized();
+  light.anisotropy = anisotropy;
+  ThrowIf(light.Validate());
+  return light;
+}
+
 std::string Light::Validate() const {
   if (type == LightType::kDirectional) {
     if (!direction_cam.allFinite() || std::abs(direction_cam.norm() - 1.0) > 1e-6) {
@@ -71,6 +84,10 @@ std::string Light::Validate() const {
     }
   } else if (!position_cam.allFinite()) {
     return "light position must be finite, got " + Format(position_cam);
+  } else if (!std::isfinite(anisotropy) || anisotropy < 0 || anisotropy > 1000) {
+    return "light anisotropy must be in 0..1000, got " + std::to_string(anisotropy);
+  } else if (anisotropy > 0 && (!axis_cam.allFinite() || std::abs(axis_cam.norm() - 1.0) > 1e-6)) {
+    return "light axis must be a finite unit vector, got " + Format(axis_cam);
   }
   if (auto m = CheckIntensity("diffuse intensity", diffuse_intensity); !m.empty()) return m;
   return CheckIntensity("specular intensity", specular_intensity);

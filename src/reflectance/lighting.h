@@ -1,8 +1,12 @@
 // Lights in the camera frame, and the full model summed over them.
 //
 // A directional light has one unit direction L (surface → light) for every point. A point light
-// has a position; at surface point x its direction is (p − x)/|p − x| and, with falloff, its
-// intensities are divided by |p − x|². Ambient light is one RGB triple for the scene.
+// has a position S; at surface point X its direction is L = (S − X)/|S − X| and, with falloff, its
+// intensities are divided by |S − X|². A point light may be an LED with an axis a and anisotropy
+// μ (LUCES' and Quéau et al.'s model, SPEC.md "Near lights"): its intensities toward X are scaled
+// by (a·(X − S)/|X − S|)^μ, zero behind it; μ = 0 is an isotropic point light. So the irradiance
+// a point sees is E(X) = Φ·(a·(X − S)/|X − S|)^μ / |X − S|², Φ the light's intensity.
+// Ambient light is one RGB triple for the scene.
 #pragma once
 
 #include <string>
@@ -22,6 +26,10 @@ struct Light {
   Rgb diffuse_intensity = Rgb::Ones();   // seed 003's i_d
   Rgb specular_intensity = Rgb::Ones();  // seed 003's i_s
   bool inverse_square_falloff = true;    // point lights only
+  // Point lights: the LED's axis (unit, the way it points) and anisotropy μ ≥ 0 (0: isotropic,
+  // the axis unused; 1: a Lambertian emitter).
+  Vec3d axis_cam = Vec3d(0, 0, -1);
+  double anisotropy = 0;
 
   // Throws std::invalid_argument naming the problem (zero or non-finite direction, negative
   // or non-finite intensity). The direction is normalized.
@@ -31,6 +39,10 @@ struct Light {
   static Light Point(const Vec3d& position_cam, const Rgb& intensity, bool inverse_square_falloff);
   static Light Point(const Vec3d& position_cam, const Rgb& diffuse_intensity,
                      const Rgb& specular_intensity, bool inverse_square_falloff);
+  // A point light with the inverse-square falloff whose intensity follows an LED's axis with
+  // anisotropy μ (the axis is normalized; μ = 0 makes it isotropic).
+  static Light Led(const Vec3d& position_cam, const Rgb& intensity, const Vec3d& axis_cam,
+                   double anisotropy);
 
   // Empty when valid, else a one-line message.
   std::string Validate() const;
@@ -44,9 +56,22 @@ struct Lighting {
   bool HasPointLights() const;
 };
 
+// The factor a point light's intensities are scaled by at a point whose unit direction toward the
+// light is `light_dir_cam`: (a·(X − S)/|X − S|)^μ = (−a·L)^μ, 0 behind an LED, 1 for μ = 0.
+template <typename T>
+T LedFactor(const Light& light, const Vec3T<T>& light_dir_cam) {
+  using std::exp;
+  using std::log;
+  if (!(light.anisotropy > 0)) return T(1);
+  const T cosine = -light_dir_cam.dot(light.axis_cam.template cast<T>());
+  if (!(cosine > T(0))) return T(0);
+  if (light.anisotropy == 1) return cosine;
+  return exp(T(light.anisotropy) * log(cosine));
+}
+
 // Light `light` as seen from a surface point: the unit direction toward it and its intensities
-// there (divided by d² for a point light with falloff). False where no direction is defined (the
-// point sits on a point light).
+// there (for a point light: the LED factor, and divided by d² with falloff). False where no
+// direction is defined (the point sits on a point light).
 template <typename T>
 bool LightAt(const Light& light, const Vec3T<T>& position_cam, Vec3T<T>* light_dir_cam,
              Vec3T<T>* diffuse, Vec3T<T>* specular) {
@@ -61,10 +86,10 @@ bool LightAt(const Light& light, const Vec3T<T>& position_cam, Vec3T<T>* light_d
   const T distance2 = to_light.squaredNorm();
   if (!(distance2 > T(0))) return false;
   *light_dir_cam = to_light / sqrt(distance2);
-  if (light.inverse_square_falloff) {
-    *diffuse /= distance2;
-    *specular /= distance2;
-  }
+  T scale = LedFactor(light, *light_dir_cam);
+  if (light.inverse_square_falloff) scale /= distance2;
+  *diffuse *= scale;
+  *specular *= scale;
   return true;
 }
 

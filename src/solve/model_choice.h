@@ -84,6 +84,9 @@ struct ModelChoiceSettings {
   int sample = 600;      // pixels scored (NormalOptions::model_sample)
   int search_candidates = 1000;
   int threads = 0;
+  // A normal per pixel of the data (masked order) from an earlier solve: each held-out fit then
+  // refines it (HeldOutFromStart) instead of searching the hemisphere first.
+  const std::vector<Vec3d>* starts = nullptr;
 };
 
 struct ModelChoice {

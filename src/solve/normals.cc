@@ -10,6 +10,7 @@
 #include "core/timing.h"
 #include "solve/few_images.h"
 #include "solve/internal.h"
+#include "solve/light_tiles.h"
 #include "solve/pixel_fit.h"
 #include "solve/search.h"
 #include "solve/woodham.h"
@@ -199,8 +200,9 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
     ParallelFor(0, pixels, 1024, o.threads, [&](std::size_t b, std::size_t e) {
       std::vector<std::pair<double, int>> order;
       order.reserve(data.images);
+      PixelLights lights(data);
       for (std::size_t p = b; p < e; ++p)
-        solutions[p] = Woodham(data, p, woodham, pinv, order, true);
+        solutions[p] = Woodham(data, p, woodham, pinv, order, lights, true);
     });
     result.summary.init_seconds = SecondsSince(start);
   } else {
@@ -217,118 +219,134 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
     model.lobe = o.model;
     // The per-pixel choice between Lambert and the object's model, on the choice's halves.
     const std::vector<int>& fold = plan.model_choice.fold;
-    const CandidateTable table(data.light_directions, model, o.shininess, o.search_candidates,
-                               fold);
     const WoodhamSettings woodham = WoodhamOf(o);
     const bool per_pixel = !o.material_known && o.per_pixel_model &&
                            o.model != reflectance::Lobe::kLambert && !fold.empty();
-    std::optional<CandidateTable> lambert_table;
     PixelFitSettings lambert_fit = fit;
     lambert_fit.model.lobe = reflectance::Lobe::kLambert;
     lambert_fit.ks_prior.reset();
     won.assign(per_pixel ? pixels : 0, -1);
     per_pixel_map = per_pixel;
-    if (per_pixel) {
-      reflectance::ModelOptions lambert;
-      lambert.lobe = reflectance::Lobe::kLambert;
-      lambert_table.emplace(data.light_directions, lambert, 1.0, o.search_candidates, fold);
-    }
+    // One table per tile of pixels that see the lights alike (one tile for distant lights).
+    struct Tables {
+      CandidateTable model;
+      std::optional<CandidateTable> lambert;
+    };
+    const std::vector<LightTile> tiles =
+        MakeLightTiles(data, TileToleranceDeg(o.model, o.shininess));
+    const auto make_tables = [&](std::size_t t) {
+      Tables tables{
+          CandidateTable(tiles[t].light_directions, model, o.shininess, o.search_candidates, fold),
+          std::nullopt};
+      if (per_pixel) {
+        reflectance::ModelOptions lambert;
+        lambert.lobe = reflectance::Lobe::kLambert;
+        tables.lambert.emplace(tiles[t].light_directions, lambert, 1.0, o.search_candidates, fold);
+      }
+      return tables;
+    };
     std::atomic<std::size_t> done{0};
     std::atomic<long long> iterations{0};
-    ParallelFor(0, pixels, 128, o.threads, [&](std::size_t b, std::size_t e) {
-      PixelFitter fitter(data, fit);
-      std::optional<PixelFitter> lambert_fitter;
-      std::optional<NormalSearch> lambert_search;
-      if (per_pixel) {
-        lambert_fitter.emplace(data, lambert_fit);
-        lambert_search.emplace(*lambert_table);
-      }
-      std::vector<double> buffer, lambert_cost(data.images), specular_cost(data.images);
-      NormalSearch search(
-          table, 16,
-          fit.ks_prior ? std::optional(internal::Luminance(*fit.ks_prior)) : std::nullopt,
-          fit.ks_prior_weight);
-      std::vector<std::pair<double, int>> order;
-      long long local = 0;
-      for (std::size_t p = b; p < e; ++p) {
-        PixelSolution& s = solutions[p];
-        if (!fitter.Prepare(p)) {
-          // Dark everywhere: flagged. Fewer than 3 unsaturated observations: Woodham on them all
-          // (or flagged by it).
-          if (fitter.dark()) {
-            s.status = PixelStatus::kDark;
-          } else {
-            s = Woodham(data, p, woodham, Eigen::Matrix3Xd(), order, true);
+    ForEachTileChunk(
+        tiles, 128, o.threads, make_tables,
+        [&](std::size_t tile, const Tables& tables, std::size_t b, std::size_t e) {
+          const CandidateTable& table = tables.model;
+          PixelFitter fitter(data, fit);
+          std::optional<PixelFitter> lambert_fitter;
+          std::optional<NormalSearch> lambert_search;
+          if (per_pixel) {
+            lambert_fitter.emplace(data, lambert_fit);
+            lambert_search.emplace(*tables.lambert);
           }
-          continue;
-        }
-        const SearchResult r =
-            search.Search(fitter.luminance(), fitter.usable(), fitter.threshold(),
-                          o.material_known ? &ks_luminance : nullptr);
-        if (r.candidate < 0 || !(r.kd > 0 || r.ks > 0)) {
-          s.status = PixelStatus::kDark;  // nothing lit under any normal
-          continue;
-        }
-        if (per_pixel) {
-          // Where the object's lobe gets no weight in the pixel's fit to all its lights the two
-          // models are the same there: Lambert, untested. Otherwise each model is searched on
-          // each fold's training lights near the all-lights answer (the tables share their
-          // directions, and the two models' answers for a pixel lie near each other: searching
-          // Lambert's own on all lights as well cost a fifth of the run, and leaving it out moved
-          // the seven DiLiGenT runs by 0.01° at most, harvest by −0.13°), and Lambert takes the
-          // pixel only where it predicts the held-out lights clearly better
-          // (kPixelModelSignificance).
-          double lobe_peak = 0;
-          const float* lobe = table.specular(r.candidate);
-          for (int j = 0; j < data.images; ++j) {
-            if (fitter.usable()[j] != 0) lobe_peak = std::max(lobe_peak, r.ks * lobe[j]);
-          }
-          bool lambert_wins = lobe_peak <= kNegligibleLobe * fitter.brightness();
-          if (!lambert_wins) {
-            lambert_search->NearTheLastOf(search);
-            HeldOutSearch(*lambert_search, *lambert_table, fitter.luminance(), fitter.usable(),
-                          fold.data(), fitter.threshold(), buffer, true, nullptr,
-                          lambert_cost.data());
-            // The specular search above was the last full one of `search`.
-            HeldOutSearch(search, table, fitter.luminance(), fitter.usable(), fold.data(),
-                          fitter.threshold(), buffer, true, nullptr, specular_cost.data());
-            const auto [mean, error] = PairedDifference(lambert_cost.data(), specular_cost.data(),
-                                                        lambert_cost.size(), fitter.usable());
-            lambert_wins = mean <= -kPixelModelSignificance * error;
-          }
-          won[p] = lambert_wins ? 0 : 1;
-          if (lambert_wins) {
-            lambert_fitter->Prepare(p);
+          std::vector<double> buffer, lambert_cost(data.images), specular_cost(data.images);
+          NormalSearch search(
+              table, 16,
+              fit.ks_prior ? std::optional(internal::Luminance(*fit.ks_prior)) : std::nullopt,
+              fit.ks_prior_weight);
+          std::vector<std::pair<double, int>> order;
+          PixelLights woodham_lights(data);
+          long long local = 0;
+          for (std::size_t i = b; i < e; ++i) {
+            const std::size_t p = tiles[tile].pixels[i];
+            PixelSolution& s = solutions[p];
+            if (!fitter.Prepare(p)) {
+              // Dark everywhere: flagged. Fewer than 3 unsaturated observations: Woodham on them
+              // all (or flagged by it).
+              if (fitter.dark()) {
+                s.status = PixelStatus::kDark;
+              } else {
+                s = Woodham(data, p, woodham, Eigen::Matrix3Xd(), order, woodham_lights, true);
+              }
+              continue;
+            }
+            const SearchResult r =
+                search.Search(fitter.luminance(), fitter.usable(), fitter.threshold(),
+                              o.material_known ? &ks_luminance : nullptr);
+            if (r.candidate < 0 || !(r.kd > 0 || r.ks > 0)) {
+              s.status = PixelStatus::kDark;  // nothing lit under any normal
+              continue;
+            }
+            if (per_pixel) {
+              // Where the object's lobe gets no weight in the pixel's fit to all its lights the two
+              // models are the same there: Lambert, untested. Otherwise each model is searched on
+              // each fold's training lights near the all-lights answer (the tables share their
+              // directions, and the two models' answers for a pixel lie near each other: searching
+              // Lambert's own on all lights as well cost a fifth of the run, and leaving it out
+              // moved the seven DiLiGenT runs by 0.01° at most, harvest by −0.13°), and Lambert
+              // takes the pixel only where it predicts the held-out lights clearly better
+              // (kPixelModelSignificance).
+              double lobe_peak = 0;
+              const float* lobe = table.specular(r.candidate);
+              for (int j = 0; j < data.images; ++j) {
+                if (fitter.usable()[j] != 0) lobe_peak = std::max(lobe_peak, r.ks * lobe[j]);
+              }
+              bool lambert_wins = lobe_peak <= kNegligibleLobe * fitter.brightness();
+              if (!lambert_wins) {
+                lambert_search->NearTheLastOf(search);
+                HeldOutSearch(*lambert_search, *tables.lambert, fitter.luminance(), fitter.usable(),
+                              fold.data(), fitter.threshold(), buffer, true, nullptr,
+                              lambert_cost.data());
+                // The specular search above was the last full one of `search`.
+                HeldOutSearch(search, table, fitter.luminance(), fitter.usable(), fold.data(),
+                              fitter.threshold(), buffer, true, nullptr, specular_cost.data());
+                const auto [mean, error] =
+                    PairedDifference(lambert_cost.data(), specular_cost.data(), lambert_cost.size(),
+                                     fitter.usable());
+                lambert_wins = mean <= -kPixelModelSignificance * error;
+              }
+              won[p] = lambert_wins ? 0 : 1;
+              if (lambert_wins) {
+                lambert_fitter->Prepare(p);
+                s.normal = table.normal(r.candidate);
+                lambert_fitter->Fit(s);
+                local += s.iterations;
+                continue;
+              }
+            }
             s.normal = table.normal(r.candidate);
-            lambert_fitter->Fit(s);
+            fitter.Fit(s);
+            // With known coefficients the best candidates of other basins are fitted too
+            // (SearchResult::others), and the lowest censored cost after the local fit wins: on a
+            // torus one pixel in 5 400 kept a wrong basin 4.9° off without. With estimated ones on
+            // photos the lowest cost is not the better normal often enough: on the seven DiLiGenT
+            // runs it moved four by −0.02 to −0.09°, harvest by +0.26°, at a third more time.
+            for (const int other : r.others) {
+              if (other < 0 || !o.material_known) break;
+              PixelSolution alternative;
+              alternative.normal = table.normal(other);
+              fitter.Fit(alternative);
+              s.iterations += alternative.iterations;
+              if (alternative.cost < s.cost) {
+                alternative.iterations = s.iterations;
+                s = alternative;
+              }
+            }
             local += s.iterations;
-            continue;
           }
-        }
-        s.normal = table.normal(r.candidate);
-        fitter.Fit(s);
-        // With known coefficients the best candidates of other basins are fitted too
-        // (SearchResult::others), and the lowest censored cost after the local fit wins: on a
-        // torus one pixel in 5 400 kept a wrong basin 4.9° off without. With estimated ones on
-        // photos the lowest cost is not the better normal often enough: on the seven DiLiGenT
-        // runs it moved four by −0.02 to −0.09°, harvest by +0.26°, at a third more time.
-        for (const int other : r.others) {
-          if (other < 0 || !o.material_known) break;
-          PixelSolution alternative;
-          alternative.normal = table.normal(other);
-          fitter.Fit(alternative);
-          s.iterations += alternative.iterations;
-          if (alternative.cost < s.cost) {
-            alternative.iterations = s.iterations;
-            s = alternative;
-          }
-        }
-        local += s.iterations;
-      }
-      iterations += local;
-      const std::size_t now = done += e - b;
-      if (o.progress) o.progress(static_cast<double>(now) / pixels);
-    });
+          iterations += local;
+          const std::size_t now = done += e - b;
+          if (o.progress) o.progress(static_cast<double>(now) / pixels);
+        });
     result.summary.iterations = iterations.load();
     result.summary.solve_seconds = SecondsSince(start);
   }

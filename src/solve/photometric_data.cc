@@ -39,7 +39,80 @@ std::string PhotometricData::Validate() const {
     }
   }
   if (values.size() != pixels.size() * images * 3) return "observation array has the wrong size";
+  if (near()) {
+    if (point_lights.size() != static_cast<std::size_t>(images)) {
+      return std::to_string(images) + " images but " + std::to_string(point_lights.size()) +
+             " point lights";
+    }
+    for (int j = 0; j < images; ++j) {
+      if (point_lights[j].type != reflectance::LightType::kPoint) {
+        return "light " + std::to_string(j + 1) + " of a near-light capture is not a point light";
+      }
+      if (auto m = point_lights[j].Validate(); !m.empty()) {
+        return "light " + std::to_string(j + 1) + ": " + m;
+      }
+    }
+    if (points_cam.size() != pixels.size()) {
+      return std::to_string(pixels.size()) + " pixels but " + std::to_string(points_cam.size()) +
+             " surface points";
+    }
+    for (const Vec3d& x : points_cam) {
+      if (!x.allFinite()) return "a surface point is not finite";
+    }
+  }
   return CheckLightSpan(light_directions);
+}
+
+PixelLights::PixelLights(const PhotometricData& data)
+    : data_(data),
+      directions_(data.light_directions.data()),
+      irradiance_(data.light_intensities.data()),
+      directions_ptr_(&data.light_directions) {
+  if (data.near()) {
+    near_directions_.resize(data.images);
+    near_irradiance_.resize(data.images);
+  }
+}
+
+void PixelLights::At(std::size_t p) {
+  if (!data_.near()) return;
+  const Vec3d& x = data_.points_cam[p];
+  for (int j = 0; j < data_.images; ++j) {
+    Vec3d specular;
+    if (!reflectance::LightAt<double>(data_.point_lights[j], x, &near_directions_[j],
+                                      &near_irradiance_[j], &specular)) {
+      near_directions_[j] = Vec3d(0, 0, 1);
+      near_irradiance_[j].setZero();
+    }
+  }
+  directions_ = near_directions_.data();
+  irradiance_ = near_irradiance_.data();
+  directions_ptr_ = &near_directions_;
+  const double distance = x.norm();
+  view_ = data_.perspective && distance > 0 ? Vec3d(-x / distance) : Vec3d(0, 0, 1);
+}
+
+void SetReferenceLights(PhotometricData& data, const Vec3d& reference_cam) {
+  data.light_directions.resize(data.point_lights.size());
+  data.light_intensities.resize(data.point_lights.size());
+  for (std::size_t j = 0; j < data.point_lights.size(); ++j) {
+    Vec3d specular;
+    if (!reflectance::LightAt<double>(data.point_lights[j], reference_cam,
+                                      &data.light_directions[j], &data.light_intensities[j],
+                                      &specular) ||
+        !(data.light_intensities[j].array() > 0).all()) {
+      throw std::invalid_argument("light " + std::to_string(j + 1) +
+                                  " sends no light to the object's centre (at the light, or "
+                                  "behind an LED's axis)");
+    }
+  }
+}
+
+Vec3d MeanPoint(const PhotometricData& data) {
+  if (data.points_cam.empty()) return Vec3d::Zero();
+  Vec3d sum = Vec3d::Zero();
+  for (const Vec3d& x : data.points_cam) sum += x;
+  return sum / static_cast<double>(data.points_cam.size());
 }
 
 double IntegerCodeStep(const PhotometricData& data) {

@@ -4,6 +4,13 @@
 //
 // Image j is modelled (SPEC.md) as  I_j = Ia⊙ka + E_j ⊙ (kd·(N·L_j) + ks·lobe_j),  E_j the RGB
 // intensity of light j, L_j its unit direction (surface → light, camera frame), V = (0, 0, 1).
+//
+// Near lights (SPEC.md "Near lights"): with `point_lights`, light j is a point light (an LED:
+// position, intensity Φ_j, axis and anisotropy) and each pixel sees it from its own surface point
+// X = points_cam[p]: L_j(X) and E_j(X) = Φ_j·(a·(X − S)/|X − S|)^μ/|X − S|² come from
+// reflectance::LightAt, and a perspective view has V(X) = −X/|X| (the eye at the origin). The
+// shared light_directions and light_intensities are then the lights as seen from one reference
+// point of the object, which is all the global search's tables (search.h) use: a start.
 #pragma once
 
 #include <algorithm>
@@ -12,6 +19,7 @@
 #include <vector>
 
 #include "core/types.h"
+#include "reflectance/lighting.h"
 
 namespace iphong::solve {
 
@@ -23,11 +31,46 @@ struct PhotometricData {
   std::vector<float> values;             // pixels × K × 3, linear
   std::vector<Vec3d> light_directions;   // K, unit
   std::vector<Vec3d> light_intensities;  // K, RGB, > 0
+  // Near lights: K point lights (empty: distant lights), each pixel's surface point (same units
+  // as the lights' positions, camera frame) and whether V is per point (perspective).
+  std::vector<reflectance::Light> point_lights;
+  std::vector<Vec3d> points_cam;  // per masked pixel, with point_lights
+  bool perspective = false;
 
   std::size_t pixel_count() const { return pixels.size(); }
+  bool near() const { return !point_lights.empty(); }
   const float* pixel(std::size_t p) const { return values.data() + p * images * 3; }
   std::string Validate() const;
 };
+
+// What pixel p of `data` sees: each light's unit direction L_j and RGB irradiance E_j, and the
+// view direction V. Distant lights: the shared directions and intensities, V = (0, 0, 1). Near
+// lights: reflectance::LightAt from the pixel's surface point; a light the point sees with no
+// irradiance in some channel (behind an LED, or at the light itself) is not lit().
+class PixelLights {
+ public:
+  // Points at the shared arrays of `data` until At() is called on near data.
+  explicit PixelLights(const PhotometricData& data);
+  void At(std::size_t p);
+  const Vec3d& direction(int j) const { return directions_[j]; }
+  const Vec3d& irradiance(int j) const { return irradiance_[j]; }
+  const Vec3d& view() const { return view_; }
+  bool lit(int j) const { return (irradiance_[j].array() > 0).all(); }
+  const std::vector<Vec3d>& directions() const { return *directions_ptr_; }
+
+ private:
+  const PhotometricData& data_;
+  std::vector<Vec3d> near_directions_, near_irradiance_;
+  const Vec3d* directions_ = nullptr;
+  const Vec3d* irradiance_ = nullptr;
+  const std::vector<Vec3d>* directions_ptr_ = nullptr;
+  Vec3d view_ = Vec3d(0, 0, 1);
+};
+
+// The shared light_directions and light_intensities of near data: its point lights as seen from
+// `reference_cam` (its surface's centre, say). Throws std::invalid_argument where a light has no
+// direction or no irradiance there.
+void SetReferenceLights(PhotometricData& data, const Vec3d& reference_cam);
 
 // "" when three or more light directions span all three dimensions, else what is wrong: with all
 // lights in one plane through the surface (or all the same) the normal's component across that
@@ -72,6 +115,9 @@ PhotometricData ObservationLayout(int width, int height, const Mask& mask,
 // Copies the masked pixels of image j (width×height×3, row-major from the top) into `data`.
 // Returns "" or what is wrong with the image. Images may be gathered concurrently.
 std::string GatherImage(PhotometricData& data, int j, const float* rgb);
+
+// The mean of the surface points of near data (the origin for distant data).
+Vec3d MeanPoint(const PhotometricData& data);
 
 // Gathers the masked pixels of K images (each width×height×3, row-major from the top).
 // Throws std::invalid_argument when sizes, counts or lights are inconsistent or not finite.

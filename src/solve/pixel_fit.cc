@@ -31,7 +31,8 @@ struct PixelModel {
   double ks_prior_weight = 0;
   double shininess = 1;
   reflectance::ModelOptions model;
-  Vec3d n0, t1, t2;  // chart: N = normalize(n0 + x0 t1 + x1 t2)
+  const PixelLights* lights = nullptr;  // the pixel's L_j and V
+  Vec3d n0, t1, t2;                     // chart: N = normalize(n0 + x0 t1 + x1 t2)
 
   void Center(const Vec3d& n) {
     n0 = n;
@@ -46,12 +47,12 @@ struct PixelModel {
     const Jet2 x0(x[0], 0), x1(x[1], 1);
     const Vec3T<Jet2> raw = n0.cast<Jet2>() + x0 * t1 + x1 * t2;
     const Vec3T<Jet2> normal = raw / raw.norm();
-    const Vec3d view = internal::ViewCam();
+    const Vec3d& view = lights->view();
     const Jet2 n(shininess);
     factors->resize(data->images);
     for (int j = 0; j < data->images; ++j) {
-      (*factors)[j] = reflectance::ShadingFactors<Jet2, double>(
-          normal, view, data->light_directions[j], n, model);
+      (*factors)[j] =
+          reflectance::ShadingFactors<Jet2, double>(normal, view, lights->direction(j), n, model);
     }
   }
 
@@ -112,6 +113,7 @@ struct PixelModel {
 struct PixelFitter::State {
   const PhotometricData& data;
   PixelFitSettings settings;
+  PixelLights lights;
   PixelModel model;
   Factors factors, trial;  // at the current point and the trial step (swapped)
   std::vector<reflectance::LightFactors<double>> values;
@@ -122,8 +124,9 @@ struct PixelFitter::State {
   double brightness = 0, threshold = 0;
   bool dark = false;
 
-  State(const PhotometricData& d, const PixelFitSettings& s) : data(d), settings(s) {
+  State(const PhotometricData& d, const PixelFitSettings& s) : data(d), settings(s), lights(d) {
     model.data = &d;
+    model.lights = &lights;
     model.channels = s.color_residuals ? 3 : 1;
     if (s.known_ks) {
       model.known_ks =
@@ -218,17 +221,22 @@ bool PixelFitter::Prepare(std::size_t p) {
   State& st = *state_;
   const int k = st.data.images;
   st.obs = st.data.pixel(p);
+  st.lights.At(p);
   st.bright.clear();
   double brightest = 0;
   const double saturation = PixelSaturation(st.obs, 3 * std::size_t(k), st.settings.saturation);
   for (int j = 0; j < k; ++j) {
     const Vec3d rgb(st.obs[3 * j], st.obs[3 * j + 1], st.obs[3 * j + 2]);
-    const bool saturated = rgb.maxCoeff() >= saturation;
+    // A near light that sends this point nothing (behind an LED) tells nothing of its normal.
+    const bool lit = st.lights.lit(j);
+    const bool saturated = rgb.maxCoeff() >= saturation || !lit;
     st.usable[j] = saturated ? 0.0 : 1.0;
     brightest = std::max(brightest, internal::Luminance(rgb));
     const Vec3d code =
         rgb.unaryExpr([&](double v) { return AtCodeMiddle(v, st.settings.code_offset); });
-    const Vec3d y = (code - st.settings.ambient_term).cwiseQuotient(st.data.light_intensities[j]);
+    const Vec3d y =
+        lit ? Vec3d((code - st.settings.ambient_term).cwiseQuotient(st.lights.irradiance(j)))
+            : Vec3d::Zero();
     for (int c = 0; c < 3; ++c) st.y_rgb[3 * j + c] = y[c];
     st.y_lum[j] = internal::Luminance(y);
     if (!saturated) st.bright.push_back(st.y_lum[j]);
@@ -296,7 +304,7 @@ void PixelFitter::Fit(internal::PixelSolution& s, const double* lights) {
         st.y_lum[j] - internal::Luminance(reflectance::CombineFactors<double>(
                           f[j], Vec3d::Ones(), Vec3d::Ones(), s.albedo, s.specular)),
         st.threshold);
-    const Vec3d& e = st.data.light_intensities[j];
+    const Vec3d& e = st.lights.irradiance(j);
     // Against the observation as the fit saw it (code offset on, ambient term off: y_j ⊙ E_j),
     // in image units.
     const Vec3d y(st.y_rgb[3 * j], st.y_rgb[3 * j + 1], st.y_rgb[3 * j + 2]);

@@ -77,15 +77,20 @@ CandidateTable::CandidateTable(const std::vector<Vec3d>& light_dir_cam,
     return;
   }
   const int folds = fold_.empty() ? 0 : 1 + *std::max_element(fold_.begin(), fold_.end());
+  // Each fold's own lights' sums, then the training lights' as all lights' less those: one pass
+  // over the table whatever the number of folds (leave-one-out has K of them).
   fold_sums_.assign(folds, std::vector<double>(sums_.size(), 0.0));
+  for (std::size_t c = 0; c < normals_.size(); ++c) {
+    for (std::size_t j = 0; j < k; ++j) {
+      double* own = &fold_sums_[fold_[j]][3 * c];
+      const double d = diffuse_[c * k + j], s = specular_[c * k + j];
+      own[0] += d * d, own[1] += d * s, own[2] += s * s;
+    }
+  }
   for (int f = 0; f < folds; ++f) {
-    for (std::size_t c = 0; c < normals_.size(); ++c) {
-      double* out = &fold_sums_[f][3 * c];
-      for (std::size_t j = 0; j < k; ++j) {
-        if (fold_[j] == f) continue;
-        const double d = diffuse_[c * k + j], s = specular_[c * k + j];
-        out[0] += d * d, out[1] += d * s, out[2] += s * s;
-      }
+    for (std::size_t i = 0; i < sums_.size(); ++i) {
+      // Sums of non-negative terms (and of d·s ≥ 0): never below zero but for rounding.
+      fold_sums_[f][i] = std::max(0.0, sums_[i] - fold_sums_[f][i]);
     }
   }
 }
@@ -271,6 +276,28 @@ HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, c
       if (fold[j] != f || usable[j] == 0) continue;
       const double predicted = refiner ? refiner->Predicted(j) : r.kd * d[j] + r.ks * s[j];
       const double cost = internal::CensoredCost(y[j] - predicted, t) / (t * t);
+      out.cost += cost;
+      if (per_light) per_light[j] = cost;
+    }
+  }
+  return out;
+}
+
+HeldOutResult HeldOutFromStart(HeldOutRefiner& refiner, const Vec3d& start, int lights,
+                               const double* y, const double* usable, const int* fold, double t,
+                               std::vector<double>& buffer, double* per_light) {
+  const int k = lights;
+  if (per_light) std::fill(per_light, per_light + k, 0.0);
+  const int folds = 1 + *std::max_element(fold, fold + k);
+  buffer.resize(k);
+  HeldOutResult out;
+  for (int f = 0; f < folds; ++f) {
+    for (int j = 0; j < k; ++j) buffer[j] = fold[j] == f ? 0.0 : usable[j];
+    const Vec3d normal = refiner.Refine(start, buffer.data());
+    if (f < 2) out.normal[f] = normal;
+    for (int j = 0; j < k; ++j) {
+      if (fold[j] != f || usable[j] == 0) continue;
+      const double cost = internal::CensoredCost(y[j] - refiner.Predicted(j), t) / (t * t);
       out.cost += cost;
       if (per_light) per_light[j] = cost;
     }

@@ -154,4 +154,11 @@ HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, c
                             std::vector<double>& buffer, bool near_last = false,
                             HeldOutRefiner* refiner = nullptr, double* per_light = nullptr);
 
+// The same held-out cost without a search: each fold's normal is `refiner`'s refinement of one
+// start (the pixel's normal from an earlier solve) on the fold's training lights. What a second
+// pass costs when the first one has placed every pixel in its basin.
+HeldOutResult HeldOutFromStart(HeldOutRefiner& refiner, const Vec3d& start, int lights,
+                               const double* y, const double* usable, const int* fold, double t,
+                               std::vector<double>& buffer, double* per_light = nullptr);
+
 }  // namespace iphong::solve

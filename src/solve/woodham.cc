@@ -22,41 +22,45 @@ Eigen::Matrix3Xd WoodhamPseudoInverse(const PhotometricData& data) {
 
 PixelSolution Woodham(const PhotometricData& data, std::size_t p, const WoodhamSettings& o,
                       const Eigen::Matrix3Xd& pinv, std::vector<std::pair<double, int>>& order,
-                      bool with_residual) {
+                      PixelLights& lights, bool with_residual) {
   const int k = data.images;
   const float* obs = data.pixel(p);
+  lights.At(p);
   order.clear();
   double brightest = 0;
   for (int j = 0; j < k; ++j) {
+    // A near light that sends the point nothing is left out (it sorts first, among the dark).
+    if (!lights.lit(j)) continue;
     const Vec3d rgb(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]);
     const double g =
-        internal::Luminance((rgb - o.ambient_term).cwiseQuotient(data.light_intensities[j]));
+        internal::Luminance((rgb - o.ambient_term).cwiseQuotient(lights.irradiance(j)));
     order.emplace_back(g, j);
     brightest = std::max(brightest, g);
   }
+  const int lit = static_cast<int>(order.size());
   PixelSolution s;
   if (!(brightest > 1e-8)) {
     s.status = PixelStatus::kDark;
     return s;
   }
-  int first = static_cast<int>(std::floor(o.discard_dark * k));
-  int last = k - static_cast<int>(std::floor(o.discard_bright * k));
+  int first = static_cast<int>(std::floor(o.discard_dark * lit));
+  int last = lit - static_cast<int>(std::floor(o.discard_bright * lit));
   if (last - first < 3) {
     first = 0;
-    last = k;
+    last = lit;
   }
   Vec3d b;
-  if (first == 0 && last == k && pinv.cols() == k) {
+  if (first == 0 && last == k && pinv.cols() == k && !data.near()) {
     b = Vec3d::Zero();
     for (int j = 0; j < k; ++j) b += pinv.col(order[j].second) * order[j].first;
   } else {
     // Only the two cut-offs matter, not the full order: two selections, O(K).
     if (first > 0) std::nth_element(order.begin(), order.begin() + first, order.end());
-    if (last < k) std::nth_element(order.begin() + first, order.begin() + last, order.end());
+    if (last < lit) std::nth_element(order.begin() + first, order.begin() + last, order.end());
     Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
     Vec3d atb = Vec3d::Zero();
     for (int i = first; i < last; ++i) {
-      const Vec3d& l = data.light_directions[order[i].second];
+      const Vec3d& l = lights.direction(order[i].second);
       ata += l * l.transpose();
       atb += l * order[i].first;
     }
@@ -76,10 +80,10 @@ PixelSolution Woodham(const PhotometricData& data, std::size_t p, const WoodhamS
   Vec3d num = Vec3d::Zero(), den = Vec3d::Zero();
   for (int i = first; i < last; ++i) {
     const int j = order[i].second;
-    const double nl = s.normal.dot(data.light_directions[j]);
+    const double nl = s.normal.dot(lights.direction(j));
     if (nl <= 0) continue;
     const Vec3d rgb = (Vec3d(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]) - o.ambient_term)
-                          .cwiseQuotient(data.light_intensities[j]);
+                          .cwiseQuotient(lights.irradiance(j));
     num += rgb * nl;
     den += Vec3d::Constant(nl * nl);
   }
@@ -94,11 +98,10 @@ PixelSolution Woodham(const PhotometricData& data, std::size_t p, const WoodhamS
   int used = 0;
   for (int i = first; i < last; ++i) {
     const int j = order[i].second;
-    const Vec3d& e = data.light_intensities[j];
-    const Vec3d predicted =
-        o.ambient_term + reflectance::LightTerm<double>(s.normal, internal::ViewCam(),
-                                                        data.light_directions[j], e, e, lambertian,
-                                                        lambert);
+    const Vec3d& e = lights.irradiance(j);
+    const Vec3d predicted = o.ambient_term + reflectance::LightTerm<double>(s.normal, lights.view(),
+                                                                            lights.direction(j), e,
+                                                                            e, lambertian, lambert);
     sq += (Vec3d(obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]) - predicted).squaredNorm();
     used += 3;
   }

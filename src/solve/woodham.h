@@ -25,9 +25,11 @@ Eigen::Matrix3Xd WoodhamPseudoInverse(const PhotometricData& data);
 
 // Pixel p's normal and RGB albedo (over the kept observations lit under the normal); with
 // `with_residual` also the RMS residual of the Lambertian model through the shared model.
-// `order` is the caller's buffer.
+// `order` and `lights` (what the pixel sees: per pixel for near lights, when pinv is unused) are
+// the caller's buffers.
 internal::PixelSolution Woodham(const PhotometricData& data, std::size_t p,
                                 const WoodhamSettings& settings, const Eigen::Matrix3Xd& pinv,
-                                std::vector<std::pair<double, int>>& order, bool with_residual);
+                                std::vector<std::pair<double, int>>& order, PixelLights& lights,
+                                bool with_residual);
 
 }  // namespace iphong::solve
