@@ -49,8 +49,9 @@ constexpr double kKsRidge = 1e-3;
 
 template <typename T>
 CoefficientPair<T> NonNegativePair(const T& d, const T& x, const T& s_data, const T& a,
-                                   const T& b_data, double prior_weight = 0, double prior_ks = 0) {
-  const T s = s_data + prior_weight + kKsRidge;
+                                   const T& b_data, double prior_weight = 0, double prior_ks = 0,
+                                   double ridge = kKsRidge) {
+  const T s = s_data + prior_weight + ridge;
   const T b = b_data + prior_weight * prior_ks;
   CoefficientPair<T> c;
   const T det = d * s - x * x;
@@ -79,7 +80,8 @@ CoefficientPair<T> NonNegativePair(const T& d, const T& x, const T& s_data, cons
 template <typename T, typename Y, typename Weight>
 std::array<CoefficientPair<T>, 3> EliminatedCoefficients(
     const std::vector<reflectance::LightFactors<T>>& factors, int channels, const double* fixed_ks,
-    Y y, Weight weight, const double* prior_ks = nullptr, double prior_weight = 0) {
+    Y y, Weight weight, const double* prior_ks = nullptr, double prior_weight = 0,
+    double ridge = kKsRidge) {
   T d = T(0), x = T(0), s = T(0);
   std::array<T, 3> a = {T(0), T(0), T(0)}, b = {T(0), T(0), T(0)};
   for (std::size_t j = 0; j < factors.size(); ++j) {
@@ -102,8 +104,8 @@ std::array<CoefficientPair<T>, 3> EliminatedCoefficients(
       out[c].kd = (a[c] - fixed_ks[c] * x) / d;
       if (out[c].kd < T(0)) out[c].kd = T(0);
     } else {
-      out[c] = prior_ks ? NonNegativePair(d, x, s, a[c], b[c], prior_weight, prior_ks[c])
-                        : NonNegativePair(d, x, s, a[c], b[c]);
+      out[c] = NonNegativePair(d, x, s, a[c], b[c], prior_ks ? prior_weight : 0.0,
+                               prior_ks ? prior_ks[c] : 0.0, ridge);
     }
   }
   return out;

@@ -8,6 +8,7 @@
 #include <map>
 #include <numeric>
 #include <random>
+#include <stdexcept>
 
 #include "core/parallel.h"
 #include "solve/light_tiles.h"
@@ -179,6 +180,24 @@ std::vector<Sample> SamplePixels(const PhotometricData& data, const ModelChoiceS
 }
 
 }  // namespace
+
+std::vector<double> PixelHeldOutCosts(const PhotometricData& data, ModelCandidate& m,
+                                      const std::vector<std::size_t>& pixels,
+                                      const std::vector<int>& fold,
+                                      const ModelChoiceSettings& settings) {
+  std::vector<Sample> sample(pixels.size());
+  for (std::size_t i = 0; i < pixels.size(); ++i) {
+    if (pixels[i] >= data.pixel_count()) throw std::invalid_argument("pixel beyond the data");
+    sample[i].pixel = pixels[i];
+  }
+  if (fold.size() != static_cast<std::size_t>(data.images)) {
+    throw std::invalid_argument("one fold per light needed");
+  }
+  ModelChoiceSettings s = settings;
+  s.fit.ambient_term = m.ambient_term;
+  s.fit.code_offset = m.code_offset;
+  return HeldOutCost(data, m, sample, fold, s);
+}
 
 std::pair<double, double> PairedDifference(const double* a, const double* b, std::size_t n,
                                            const double* use) {

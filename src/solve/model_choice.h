@@ -108,6 +108,16 @@ constexpr double kMinTestedCodeStep = 1.0 / 1023;
 ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate> family,
                         const ModelChoiceSettings& settings);
 
+// Model m's held-out cost (its lobe, shininess, reading of the observations and ks prior; the
+// mean and standard error set in m) on each of `pixels` (positions in data), in units of each
+// pixel's t², over the folds `fold` (one per light): what ChooseModel compares models by, for
+// comparing something else on the same pixels — the lights' distance. A pixel that cannot be
+// fitted costs 0.
+std::vector<double> PixelHeldOutCosts(const PhotometricData& data, ModelCandidate& m,
+                                      const std::vector<std::size_t>& pixels,
+                                      const std::vector<int>& fold,
+                                      const ModelChoiceSettings& settings);
+
 // The ambient term Ia⊙ka (RGB, image units) when it is not known. Every light adds to the
 // ambient, so a pixel's darkest observation is the ambient itself wherever one light is in
 // attached or cast shadow, and above it otherwise: the estimate is the 25th percentile over the

@@ -8,6 +8,7 @@
 
 #include "core/parallel.h"
 #include "core/timing.h"
+#include "solve/assemble.h"
 #include "solve/few_images.h"
 #include "solve/internal.h"
 #include "solve/light_tiles.h"
@@ -16,10 +17,7 @@
 #include "solve/woodham.h"
 
 namespace iphong::solve {
-namespace {
-
-using internal::PixelSolution;
-using internal::PixelStatus;
+namespace internal {
 
 WoodhamSettings WoodhamOf(const NormalOptions& o) {
   return {o.discard_dark, o.discard_bright, o.ambient_term};
@@ -39,6 +37,36 @@ PixelFitSettings FitSettingsOf(const NormalOptions& o) {
   s.color_residuals = o.color_residuals;
   return s;
 }
+
+PixelFitSettings PlanFitSettings(const NormalPlan& plan) {
+  const NormalOptions& o = plan.options;
+  PixelFitSettings fit = FitSettingsOf(o);
+  if (const ModelCandidate& m = plan.model_choice.chosen;
+      !o.material_known && m.ks_prior_weight > 0) {
+    fit.ks_prior = m.ks_prior;
+    fit.ks_prior_weight = m.ks_prior_weight;
+  }
+  return fit;
+}
+
+void CheckInputs(const PhotometricData& data, const NormalOptions& options) {
+  if (auto m = data.Validate(); !m.empty()) throw std::invalid_argument(m);
+  if (auto m = options.Validate(); !m.empty()) throw std::invalid_argument(m);
+  if (data.images < 3) {
+    throw std::invalid_argument("per-pixel photometric stereo needs at least 3 images, got " +
+                                std::to_string(data.images));
+  }
+}
+
+}  // namespace internal
+
+namespace {
+
+using internal::CheckInputs;
+using internal::FitSettingsOf;
+using internal::PixelSolution;
+using internal::PixelStatus;
+using internal::WoodhamOf;
 
 // The per-channel median of the pixels' ks: the object's typical coefficient.
 Vec3d MedianKs(const std::vector<Vec3f>& ks) {
@@ -99,6 +127,8 @@ PhotometricData SubsetObservations(const PhotometricData& data,
   out.images = data.images;
   out.light_directions = data.light_directions;
   out.light_intensities = data.light_intensities;
+  out.point_lights = data.point_lights;
+  out.perspective = data.perspective;
   AppendObservations(out, data, indices, 0);
   return out;
 }
@@ -112,6 +142,7 @@ void AppendObservations(PhotometricData& to, const PhotometricData& from,
     if (i >= from.pixel_count()) throw std::invalid_argument("sample index beyond the pixels");
     to.pixels.push_back(static_cast<int>(from.pixels[i] + pixel_offset));
     to.values.insert(to.values.end(), from.pixel(i), from.pixel(i) + values);
+    if (from.near()) to.points_cam.push_back(from.points_cam[i]);
   }
 }
 
@@ -132,21 +163,12 @@ bool NeedsPlanSample(const NormalOptions& options) {
   return options.model != reflectance::Lobe::kLambert && !options.material_known;
 }
 
-namespace {
-
-void CheckInputs(const PhotometricData& data, const NormalOptions& options) {
-  if (auto m = data.Validate(); !m.empty()) throw std::invalid_argument(m);
-  if (auto m = options.Validate(); !m.empty()) throw std::invalid_argument(m);
-  if (data.images < 3) {
-    throw std::invalid_argument("per-pixel photometric stereo needs at least 3 images, got " +
-                                std::to_string(data.images));
-  }
-}
-
-}  // namespace
-
-NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& options) {
+NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& options,
+                       const std::vector<Vec3d>* starts) {
   CheckInputs(sample, options);
+  if (starts && starts->size() != sample.pixel_count()) {
+    throw std::invalid_argument("plan: one start per pixel of the sample needed");
+  }
   NormalPlan plan;
   plan.options = options;
   plan.requested_model = options.model;
@@ -158,6 +180,7 @@ NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& optio
   choice.sample = o.model_sample;
   choice.search_candidates = o.search_candidates;
   choice.threads = o.threads;
+  choice.starts = starts;
   plan.model_choice = ChooseModel(
       sample, ModelFamily(o.choose_model ? std::nullopt : std::optional(o.model)), choice);
   o.model = plan.model_choice.chosen.lobe;
@@ -166,6 +189,49 @@ NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& optio
   o.code_offset = plan.model_choice.chosen.code_offset;
   plan.model_seconds = SecondsSince(start);
   return plan;
+}
+
+void internal::AssembleNormals(const PhotometricData& data, const NormalOptions& o,
+                               const std::vector<PixelSolution>& solutions,
+                               const std::vector<signed char>& won, bool per_pixel_map,
+                               NormalResult& result) {
+  const std::size_t pixels = data.pixel_count();
+  result.model = o.model;
+  result.shininess = o.shininess;
+  result.ambient_term = o.ambient_term;
+  result.code_offset = o.code_offset;
+  const bool specular = o.model != reflectance::Lobe::kLambert;
+  if (per_pixel_map) {
+    result.model_map = ImageF(data.width, data.height, 1, -1.0f);
+    for (std::size_t i = 0; i < pixels; ++i) {
+      if (solutions[i].status == PixelStatus::kSolved) {
+        result.model_map.pixels[static_cast<std::size_t>(data.pixels[i])] = won[i];
+      }
+    }
+  }
+  result.normals = ImageF(data.width, data.height, 3);
+  result.albedo = ImageF(data.width, data.height, 3);
+  result.residual = ImageF(data.width, data.height, 1);
+  if (specular) result.specular = ImageF(data.width, data.height, 3);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    const std::size_t p = static_cast<std::size_t>(data.pixels[i]);
+    const PixelSolution& s = solutions[i];
+    if (s.status == PixelStatus::kDark) ++result.summary.dark_pixels;
+    if (s.status == PixelStatus::kUnderdetermined) ++result.summary.underdetermined_pixels;
+    const bool ok = s.status == PixelStatus::kSolved && s.normal.allFinite();
+    const Vec3d n = ok ? s.normal : Vec3d(0, 0, 1);  // never NaN: flagged in the residual map
+    for (int c = 0; c < 3; ++c) {
+      result.normals.pixels[3 * p + c] = static_cast<float>(n[c]);
+      result.albedo.pixels[3 * p + c] = ok ? static_cast<float>(s.albedo[c]) : 0.0f;
+      if (specular && ok) result.specular.pixels[3 * p + c] = static_cast<float>(s.specular[c]);
+    }
+    result.residual.pixels[p] = ok ? static_cast<float>(s.residual) : -1.0f;
+  }
+  result.summary.success = true;
+  result.summary.message =
+      "solved " +
+      std::to_string(pixels - result.summary.dark_pixels - result.summary.underdetermined_pixels) +
+      " of " + std::to_string(pixels) + " pixels";
 }
 
 NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan& plan) {
@@ -207,14 +273,9 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
     result.summary.init_seconds = SecondsSince(start);
   } else {
     const auto start = Clock::now();
-    PixelFitSettings fit = FitSettingsOf(o);
+    const PixelFitSettings fit = internal::PlanFitSettings(plan);
     // The search runs on luminance: the known ks enters as its luminance.
     const double ks_luminance = internal::Luminance(o.ks);
-    if (const ModelCandidate& m = plan.model_choice.chosen;
-        !o.material_known && m.ks_prior_weight > 0) {
-      fit.ks_prior = m.ks_prior;
-      fit.ks_prior_weight = m.ks_prior_weight;
-    }
     reflectance::ModelOptions model;
     model.lobe = o.model;
     // The per-pixel choice between Lambert and the object's model, on the choice's halves.
@@ -351,42 +412,7 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
     result.summary.solve_seconds = SecondsSince(start);
   }
 
-  result.model = o.model;
-  result.shininess = o.shininess;
-  result.ambient_term = o.ambient_term;
-  result.code_offset = o.code_offset;
-  const bool specular = o.model != reflectance::Lobe::kLambert;
-  if (per_pixel_map) {
-    result.model_map = ImageF(data.width, data.height, 1, -1.0f);
-    for (std::size_t i = 0; i < pixels; ++i) {
-      if (solutions[i].status == PixelStatus::kSolved) {
-        result.model_map.pixels[static_cast<std::size_t>(data.pixels[i])] = won[i];
-      }
-    }
-  }
-  result.normals = ImageF(data.width, data.height, 3);
-  result.albedo = ImageF(data.width, data.height, 3);
-  result.residual = ImageF(data.width, data.height, 1);
-  if (specular) result.specular = ImageF(data.width, data.height, 3);
-  for (std::size_t i = 0; i < pixels; ++i) {
-    const std::size_t p = static_cast<std::size_t>(data.pixels[i]);
-    const PixelSolution& s = solutions[i];
-    if (s.status == PixelStatus::kDark) ++result.summary.dark_pixels;
-    if (s.status == PixelStatus::kUnderdetermined) ++result.summary.underdetermined_pixels;
-    const bool ok = s.status == PixelStatus::kSolved && s.normal.allFinite();
-    const Vec3d n = ok ? s.normal : Vec3d(0, 0, 1);  // never NaN: flagged in the residual map
-    for (int c = 0; c < 3; ++c) {
-      result.normals.pixels[3 * p + c] = static_cast<float>(n[c]);
-      result.albedo.pixels[3 * p + c] = ok ? static_cast<float>(s.albedo[c]) : 0.0f;
-      if (specular && ok) result.specular.pixels[3 * p + c] = static_cast<float>(s.specular[c]);
-    }
-    result.residual.pixels[p] = ok ? static_cast<float>(s.residual) : -1.0f;
-  }
-  result.summary.success = true;
-  result.summary.message =
-      "solved " +
-      std::to_string(pixels - result.summary.dark_pixels - result.summary.underdetermined_pixels) +
-      " of " + std::to_string(pixels) + " pixels";
+  internal::AssembleNormals(data, o, solutions, won, per_pixel_map, result);
   return result;
 }
 

@@ -159,13 +159,23 @@ struct NormalPlan {
   double model_seconds = 0;
 };
 
-// The whole-object decisions, from the plan sample's observations. Throws
-// std::invalid_argument for invalid data or options.
-NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& options);
+// The whole-object decisions, from the plan sample's observations. With `starts` (a normal per
+// pixel of the sample, from an earlier solve) the model choice refines them instead of searching
+// (ModelChoiceSettings::starts). Throws std::invalid_argument for invalid data or options.
+NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& options,
+                       const std::vector<Vec3d>* starts = nullptr);
 
 // Every pixel of `data` fitted with the plan (images of data.width × data.height). The
 // whole-object summaries — ks, material_estimated, the notes — are left to FinishNormals.
 NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan& plan);
+
+// A later pass of an iterative solve (near lights: the surface moved, and with it the lights each
+// pixel sees): every pixel of `data` refitted by the local fit alone from `previous`'s normal,
+// with the plan's model and the model each pixel took there (previous.model_map), no search.
+// Pixels `previous` did not solve start from Woodham's normal. `previous` must be a result on
+// data's image size; the whole-object summaries are copied from it.
+NormalResult RefineNormalsWithPlan(const PhotometricData& data, const NormalPlan& plan,
+                                   const NormalResult& previous);
 
 // Fills the whole-object summaries: ks is the per-channel median of the specular coefficients
 // of the solved plan-sample pixels that kept the lobe (`sample_ks`, one per such pixel,

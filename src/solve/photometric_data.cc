@@ -96,15 +96,17 @@ void SetReferenceLights(PhotometricData& data, const Vec3d& reference_cam) {
   data.light_directions.resize(data.point_lights.size());
   data.light_intensities.resize(data.point_lights.size());
   for (std::size_t j = 0; j < data.point_lights.size(); ++j) {
-    Vec3d specular;
-    if (!reflectance::LightAt<double>(data.point_lights[j], reference_cam,
-                                      &data.light_directions[j], &data.light_intensities[j],
-                                      &specular) ||
-        !(data.light_intensities[j].array() > 0).all()) {
-      throw std::invalid_argument("light " + std::to_string(j + 1) +
-                                  " sends no light to the object's centre (at the light, or "
-                                  "behind an LED's axis)");
+    const reflectance::Light& light = data.point_lights[j];
+    Vec3d direction, irradiance, specular;
+    if (!reflectance::LightAt<double>(light, reference_cam, &direction, &irradiance, &specular)) {
+      direction = Vec3d(0, 0, 1);  // the point at the light: no direction to start from
     }
+    data.light_directions[j] = direction;
+    // Only a start for the tables: a light that sends the point nothing (behind an LED) keeps
+    // its own intensity there, so the shared intensities stay valid.
+    data.light_intensities[j] = (irradiance.array() > 0).all()
+                                    ? irradiance
+                                    : Vec3d(light.diffuse_intensity.cwiseMax(1e-300));
   }
 }
 

@@ -68,8 +68,8 @@ class PixelLights {
 };
 
 // The shared light_directions and light_intensities of near data: its point lights as seen from
-// `reference_cam` (its surface's centre, say). Throws std::invalid_argument where a light has no
-// direction or no irradiance there.
+// `reference_cam` (its surface's centre, say); a light with no direction there (the point at the
+// light) gets (0, 0, 1), one that sends it nothing its own intensity.
 void SetReferenceLights(PhotometricData& data, const Vec3d& reference_cam);
 
 // "" when three or more light directions span all three dimensions, else what is wrong: with all

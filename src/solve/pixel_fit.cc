@@ -29,6 +29,7 @@ struct PixelModel {
   std::optional<Vec3d> known_ks;  // per channel (luminance in [0] when channels = 1)
   std::optional<Vec3d> ks_prior;  // the same layout
   double ks_prior_weight = 0;
+  double ks_ridge = internal::kKsRidge;
   double shininess = 1;
   reflectance::ModelOptions model;
   const PixelLights* lights = nullptr;  // the pixel's L_j and V
@@ -62,7 +63,7 @@ struct PixelModel {
         factors, channels, known_ks ? known_ks->data() : nullptr,
         [&](std::size_t j, int c) { return y[j * channels + c]; },
         [&](std::size_t j) { return weight[j]; }, ks_prior ? ks_prior->data() : nullptr,
-        ks_prior_weight);
+        ks_prior_weight, ks_ridge);
   }
 
   // Gauss–Newton normal equations of ½ Σ_j w_j Σ_c r_jc² with r = y − kd·d − ks·s, accumulated
@@ -122,6 +123,7 @@ struct PixelFitter::State {
   const float* obs = nullptr;
   Vec3d fitted_albedo = Vec3d::Zero(), fitted_specular = Vec3d::Zero();  // the last Fit's
   double brightness = 0, threshold = 0;
+  double saturation_level = 0;  // the pixel's (PixelSaturation)
   bool dark = false;
 
   State(const PhotometricData& d, const PixelFitSettings& s) : data(d), settings(s), lights(d) {
@@ -138,6 +140,7 @@ struct PixelFitter::State {
       model.ks_prior_weight = s.ks_prior_weight;
     }
     model.shininess = s.shininess;
+    model.ks_ridge = s.ks_ridge;
     model.model = s.model;
     // A known zero ks is no specular term: the Lambertian model, not a zero lobe.
     if (s.known_ks && s.known_ks->isZero()) model.model.lobe = reflectance::Lobe::kLambert;
@@ -161,7 +164,8 @@ struct PixelFitter::State {
       const double r = ch == 1 ? residuals[j]
                                : internal::Luminance(Vec3d(residuals[3 * j], residuals[3 * j + 1],
                                                            residuals[3 * j + 2]));
-      weights[j] = usable[j] * internal::CensoredWeight(r, threshold);
+      weights[j] = usable[j] *
+                   internal::CensoredWeight(settings.censor_bright ? -std::abs(r) : r, threshold);
     }
   }
 
@@ -225,6 +229,7 @@ bool PixelFitter::Prepare(std::size_t p) {
   st.bright.clear();
   double brightest = 0;
   const double saturation = PixelSaturation(st.obs, 3 * std::size_t(k), st.settings.saturation);
+  st.saturation_level = saturation;
   for (int j = 0; j < k; ++j) {
     const Vec3d rgb(st.obs[3 * j], st.obs[3 * j + 1], st.obs[3 * j + 2]);
     // A near light that sends this point nothing (behind an LED) tells nothing of its normal.
@@ -291,7 +296,7 @@ void PixelFitter::Fit(internal::PixelSolution& s, const double* lights) {
       [&](std::size_t j, int c) { return st.y_rgb[3 * j + c]; },
       [&](std::size_t j) { return st.weights[j]; },
       st.settings.ks_prior && !st.settings.known_ks ? st.settings.ks_prior->data() : nullptr,
-      st.settings.ks_prior_weight);
+      st.settings.ks_prior_weight, st.settings.ks_ridge);
   s.albedo = Vec3d(coef[0].kd, coef[1].kd, coef[2].kd);
   s.specular = st.model.model.lobe == reflectance::Lobe::kLambert
                    ? Vec3d::Zero()
@@ -300,10 +305,9 @@ void PixelFitter::Fit(internal::PixelSolution& s, const double* lights) {
   int used = 0;
   for (int j = 0; j < k; ++j) {
     if (st.usable[j] == 0) continue;
-    cost += internal::CensoredCost(
-        st.y_lum[j] - internal::Luminance(reflectance::CombineFactors<double>(
-                          f[j], Vec3d::Ones(), Vec3d::Ones(), s.albedo, s.specular)),
-        st.threshold);
+    const double r = st.y_lum[j] - internal::Luminance(reflectance::CombineFactors<double>(
+                                       f[j], Vec3d::Ones(), Vec3d::Ones(), s.albedo, s.specular));
+    cost += internal::CensoredCost(st.settings.censor_bright ? -std::abs(r) : r, st.threshold);
     const Vec3d& e = st.lights.irradiance(j);
     // Against the observation as the fit saw it (code offset on, ambient term off: y_j ⊙ E_j),
     // in image units.
@@ -319,6 +323,37 @@ void PixelFitter::Fit(internal::PixelSolution& s, const double* lights) {
   st.fitted_specular = s.specular;
   // Copied back, not moved: usable() hands out this buffer.
   if (lights) std::copy(st.saved_usable.begin(), st.saved_usable.end(), st.usable.begin());
+}
+
+double PixelFitter::ImageCost(const double* lights) const {
+  const State& st = *state_;
+  const int k = st.data.images;
+  // Every unsaturated observation, in image units: a light that sends this point nothing
+  // (behind an LED) is predicted dark, so a surface placed where the lights miss it is not
+  // excused its bright observations.
+  std::vector<double> recorded(k, 0.0), bright;
+  bright.reserve(k);
+  for (int j = 0; j < k; ++j) {
+    const Vec3d rgb(st.obs[3 * j], st.obs[3 * j + 1], st.obs[3 * j + 2]);
+    if (rgb.maxCoeff() >= st.saturation_level || (lights && lights[j] == 0)) {
+      recorded[j] = NAN;
+      continue;
+    }
+    const Vec3d code =
+        rgb.unaryExpr([&](double v) { return AtCodeMiddle(v, st.settings.code_offset); });
+    recorded[j] = internal::Luminance(code - st.settings.ambient_term);
+    bright.push_back(recorded[j]);
+  }
+  const double t = st.settings.shadow_threshold * internal::BrightnessScale(bright);
+  double cost = 0;
+  for (int j = 0; j < k; ++j) {
+    if (std::isnan(recorded[j])) continue;
+    const Vec3d& e = st.lights.irradiance(j);
+    const double r = recorded[j] - internal::Luminance(reflectance::CombineFactors<double>(
+                                       st.values[j], e, e, st.fitted_albedo, st.fitted_specular));
+    cost += internal::CensoredCost(st.settings.censor_bright ? -std::abs(r) : r, t);
+  }
+  return cost / (t * t);
 }
 
 double PixelFitter::Predicted(int j) const {

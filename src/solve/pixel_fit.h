@@ -36,6 +36,13 @@ struct PixelFitSettings {
   int rounds = 4;                 // reweighting rounds
   int max_iterations = 10;        // per round
   bool color_residuals = true;    // 3 channels, or their luminance (faster)
+  // ks's pull toward 0 (internal::kKsRidge), a regularizer of the normal where no light shows
+  // the lobe; 0 for the model's own misfit (near/near.h compares surfaces by it).
+  double ks_ridge = internal::kKsRidge;
+  // Censor observations brighter than the model by more than t too (ρ(r) = min(r², t²)): a
+  // Lambertian fit that leaves highlights out as it leaves shadows, for placing a surface
+  // before the object's lobe is known (near/near.h).
+  bool censor_bright = false;
 };
 
 class PixelFitter {
@@ -65,6 +72,13 @@ class PixelFitter {
   // After Fit: the luminance the fitted model predicts for light j (any light, fitted or not),
   // in the units of luminance().
   double Predicted(int j) const;
+  // After Fit: its censored cost in image units, Σ_j ρ(I_j − E_j·model_j, t)/t² over the
+  // unsaturated observations (luminance; t = shadow_threshold × the pixel's recorded
+  // brightness), a light that sends the point nothing predicting dark: the images' own misfit,
+  // comparable between different lights for the same pixel (near lights at different distances
+  // weigh the observations y_j = I_j/E_j differently). With `lights` (K weights, 0 or 1) only
+  // those where it is 1.
+  double ImageCost(const double* lights = nullptr) const;
 
  private:
   struct State;

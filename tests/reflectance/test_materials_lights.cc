@@ -119,3 +119,41 @@ TEST(ModelNames, ParseAndPrintRoundTrip) {
 
 }  // namespace
 }  // namespace iphong::reflectance
+
+namespace iphong::reflectance {
+namespace {
+
+// SPEC.md's LED: E(X) = Φ·(a·(X − S)/|X − S|)^μ/|X − S|², the same factor on the specular
+// intensity, nothing behind the LED, and μ = 0 an isotropic point light.
+TEST(LedLight, IrradianceIsTheClosedForm) {
+  const Vec3d s(0, 0, 0), axis = Vec3d(0, 0.6, -0.8);
+  const Vec3d x(30, 10, -400);
+  const double d2 = (x - s).squaredNorm();
+  const double cosine = axis.dot((x - s).normalized());
+  for (double mu : {0.0, 1.0, 2.5}) {
+    const Light led = Light::Led(s, Vec3d(1e5, 2e5, 3e5), axis * 5, mu);
+    EXPECT_NEAR(led.axis_cam.norm(), 1, 1e-15);
+    Vec3d dir, diffuse, specular;
+    ASSERT_TRUE(LightAt<double>(led, x, &dir, &diffuse, &specular));
+    EXPECT_NEAR((dir - (s - x).normalized()).norm(), 0, 1e-15);
+    for (int c = 0; c < 3; ++c) {
+      const double expected = 1e5 * (c + 1) * std::pow(cosine, mu) / d2;
+      EXPECT_NEAR(diffuse[c], expected, 1e-12 * expected) << "mu " << mu;
+      EXPECT_NEAR(specular[c], expected, 1e-12 * expected) << "mu " << mu;
+    }
+    // Behind the LED (the axis turned away from the point): no light, but still a direction.
+    const Light away = Light::Led(s, Vec3d::Ones(), -axis, mu);
+    ASSERT_TRUE(LightAt<double>(away, x, &dir, &diffuse, &specular));
+    if (mu > 0) {
+      EXPECT_EQ(diffuse, Vec3d::Zero());
+    } else {
+      EXPECT_NEAR(diffuse[0], 1 / d2, 1e-18);
+    }
+  }
+  EXPECT_THROW(Light::Led(s, Vec3d::Ones(), Vec3d::Zero(), 1), std::invalid_argument);
+  EXPECT_THROW(Light::Led(s, Vec3d::Ones(), axis, -1), std::invalid_argument);
+  EXPECT_THROW(Light::Led(s, Vec3d::Ones(), axis, std::nan("")), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace iphong::reflectance

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <random>
 
+#include "reflectance/lighting.h"
 #include "reflectance/phong.h"
 
 namespace iphong::reflectance {
@@ -231,6 +232,43 @@ INSTANTIATE_TEST_SUITE_P(
                       LobeCase{Lobe::kBlinnPhong, PowerMode::kFastApprox, "BlinnPhongFastApprox"},
                       LobeCase{Lobe::kLambert, PowerMode::kExact, "Lambert"}),
     [](const auto& info) { return std::string(info.param.name); });
+
+}  // namespace
+}  // namespace iphong::reflectance
+
+namespace iphong::reflectance {
+namespace {
+
+// A point light's irradiance E(X) = Φ·(a·(X − S)/|X − S|)^μ/|X − S|² (LightAt) as the surface
+// point X moves: its Jet derivative against central differences, for an isotropic light, a
+// Lambertian LED (μ = 1) and a narrow one (μ = 4.3, through exp/log).
+TEST(LedGradient, IrradianceAlongTheSurfaceMatchesFiniteDifferences) {
+  using Jet3 = ceres::Jet<double, 3>;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (double mu : {0.0, 1.0, 4.3}) {
+    const Light light =
+        Light::Led(Vec3d(30, 40, 0), Vec3d(2e4, 1e4, 5e3), Vec3d(-0.3, -0.4, -1), mu);
+    for (int trial = 0; trial < 20; ++trial) {
+      const Vec3d x(10 * u(rng), 10 * u(rng), -200 + 10 * u(rng));
+      Vec3T<Jet3> xj(Jet3(x[0], 0), Jet3(x[1], 1), Jet3(x[2], 2)), dir, diffuse, specular;
+      ASSERT_TRUE(LightAt<Jet3>(light, xj, &dir, &diffuse, &specular));
+      for (int k = 0; k < 3; ++k) {
+        const double h = 1e-4;
+        Vec3d xp = x, xm = x, d, ep, em, s;
+        xp[k] += h;
+        xm[k] -= h;
+        LightAt<double>(light, xp, &d, &ep, &s);
+        LightAt<double>(light, xm, &d, &em, &s);
+        for (int c = 0; c < 3; ++c) {
+          const double fd = (ep[c] - em[c]) / (2 * h);
+          EXPECT_NEAR(diffuse[c].v[k], fd, 1e-6 * std::abs(diffuse[c].a) + 1e-12)
+              << "mu " << mu << " coordinate " << k;
+        }
+      }
+    }
+  }
+}
 
 }  // namespace
 }  // namespace iphong::reflectance

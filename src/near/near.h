@@ -1,0 +1,109 @@
+// Near-light photometric stereo (SPEC.md "Near lights"). Under point lights a pixel sees each
+// light from its own surface point X: L_j(X) = (S_j − X)/|S_j − X| and E_j(X) = Φ_j·(a_j·(X −
+// S_j)/|X − S_j|)^μ_j/|X − S_j|², and under a perspective camera V(X) = −X/|X|
+// (reflectance::LightAt, solve::PixelLights). X depends on the surface, the surface on the
+// normals, the normals on X: the loop
+//
+//   X⁰ on a first guess of the surface: a plane facing the camera at the object's distance;
+//   pass k: normals with every pixel's own L, E and V (solve/normals.h); integrated into a
+//     surface (integrate/integrate.h: log depth under a perspective camera, heights under an
+//     orthographic one); the one number integration leaves free — the depth's scale, or the
+//     surface's distance along the axis — chosen by the pixels' own fits (ChooseSurfaceOffset);
+//     X^{k+1} on that surface;
+//   until the normals move less than tolerance_deg on average, or max_passes.
+//
+// The first passes are Woodham's (cheap, and close enough to place the surface), then one full
+// solve plans the model (the held-out choice) and searches every pixel's hemisphere with tables
+// per tile of pixels that see the lights alike (solve/light_tiles.h), and the later passes refine
+// each pixel locally from its last normal (solve::RefineNormalsWithPlan): warm starts.
+//
+// Units: the lights' positions, the surface points and the depth share one unit (mm for a capture
+// in the near-light layout); camera frame of SPEC.md, the eye at the origin.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "geometry/height_map.h"
+#include "solve/normals.h"
+
+namespace iphong::near {
+
+// The surface point of each of data's pixels (masked order) at `value` (depth along the axis,
+// perspective; z, orthographic), through `frame` (geometry::HeightMapPoint).
+std::vector<Vec3d> SurfacePoints(const solve::PhotometricData& data,
+                                 const geometry::HeightMapFrame& frame,
+                                 const std::vector<double>& value);
+
+// The object's distance along the optical axis as the lights' layout says it, or 0 when it does
+// not: where the LEDs' axes point (the point nearest to every axis line, when they are not
+// parallel), else the centre of the sphere the lights lie on (a dome: their distances from it
+// agree within 10 %). Only a start: the loop chooses the surface's distance from the images.
+double GuessDistance(const std::vector<reflectance::Light>& point_lights);
+
+struct NearOptions {
+  solve::NormalOptions normals;
+  // The object's distance along the optical axis, a first guess (0: GuessDistance, else the
+  // distance the images fit best among a wide range).
+  double distance = 0;
+  int max_passes = 8;
+  int woodham_passes = 2;       // before the full solve; 0: straight to it
+  double tolerance_deg = 0.05;  // mean change of the normals between passes that ends the loop
+  double min_cos = 0.05;        // integration's grazing guard (integrate::IntegrateOptions)
+  int scale_sample = 1000;      // pixels whose fits choose the surface's distance
+  // Called with a line on each pass (for a command's log); may be empty.
+  std::function<void(const std::string&)> log;
+
+  std::string Validate() const;
+};
+
+struct NearPass {
+  std::string kind;       // "woodham", "solve" (plan and search) or "refine"
+  double change_deg = 0;  // mean angle to the last pass's normals (0 for the first)
+  double distance = 0;    // the surface's mean distance along the axis after the pass
+  double seconds = 0;
+};
+
+struct NearResult {
+  solve::NormalResult normals;
+  ImageF depth;   // 1 channel: distance along the optical axis of each pixel's point, 0 outside
+  ImageF points;  // 3 channels: the surface point of each pixel (camera frame), 0 outside
+  std::vector<NearPass> passes;
+  bool converged = false;
+  double last_change_deg = 0;
+  double distance = 0;  // the surface's mean distance along the axis
+  // Nothing in the options or the lights' layout gave the distance: the images chose it among
+  // a wide range (a warning for the user: --distance settles it).
+  bool distance_from_images = false;
+  double seconds = 0;
+};
+
+// The loop above on data whose point_lights are set (points_cam and the shared directions are
+// set here). Throws std::invalid_argument for invalid data, options or frame, and when no
+// distance can be found.
+NearResult SolveNearLights(solve::PhotometricData data, const geometry::HeightMapFrame& frame,
+                           const NearOptions& options);
+
+// The images' misfit with the surface at `depth` (per pixel of data: distance along the axis):
+// each of `sample` refits its normal from `normals` (per pixel of data) with the lights seen
+// from its point, and the censored costs in image units (solve::PixelFitter::ImageCost) are
+// summed.
+double SurfaceCost(const solve::PhotometricData& data, const geometry::HeightMapFrame& frame,
+                   const std::vector<double>& depth, const std::vector<Vec3d>& normals,
+                   const std::vector<std::size_t>& sample, const solve::PixelFitSettings& fit,
+                   int threads);
+
+// The surface's free number — the depth's scale (perspective) or its offset along the axis
+// (orthographic) — as the pixels' fits choose it: each of `sample` (positions in data) refits its
+// normal from `normals` (the last pass's, per pixel of data) with the lights seen from its point
+// on `value`·scale (or `value` + offset), and the candidate whose censored costs, in units of
+// each pixel's t², sum lowest wins; a grid over a factor `range` either way, then golden section.
+// Returns the factor (perspective) or the offset (orthographic) to apply.
+double ChooseSurfaceOffset(const solve::PhotometricData& data,
+                           const geometry::HeightMapFrame& frame, const std::vector<double>& value,
+                           const std::vector<Vec3d>& normals,
+                           const std::vector<std::size_t>& sample,
+                           const solve::PixelFitSettings& fit, double range, int threads);
+
+}  // namespace iphong::near
