@@ -8,14 +8,21 @@
 //   pass k: normals with every pixel's own L, E and V (solve/normals.h); integrated into a
 //     surface (integrate/integrate.h: log depth under a perspective camera, heights under an
 //     orthographic one); the one number integration leaves free — the depth's scale, or the
-//     surface's distance along the axis — chosen by the pixels' own fits (ChooseSurfaceOffset);
+//     surface's distance along the axis — chosen by the images (ChooseSurfaceOffset);
 //     X^{k+1} on that surface;
-//   until the normals move less than tolerance_deg on average, or max_passes.
+//   until the normals move less than tolerance_deg on average (or stop settling), or max_passes.
 //
-// The first passes are Woodham's (cheap, and close enough to place the surface), then one full
-// solve plans the model (the held-out choice) and searches every pixel's hemisphere with tables
-// per tile of pixels that see the lights alike (solve/light_tiles.h), and the later passes refine
-// each pixel locally from its last normal (solve::RefineNormalsWithPlan): warm starts.
+// The first passes are Woodham's (cheap, and close enough to place the surface; more while its
+// normals still move), then one full solve plans the model (the held-out choice) and searches
+// every pixel's hemisphere with tables per tile of pixels that see the lights alike
+// (solve/light_tiles.h), and the later passes refine each pixel locally from its last normal
+// (solve::RefineNormalsWithPlan): warm starts. Once the normals settle, the lobe is chosen again
+// from them (warm, no search) on the settled surface, and the loop goes on if it changed.
+//
+// Where nothing says how far the object is (a ring of lights in the camera's plane, no distance
+// given), the images do: the surfaces Woodham's normals make at distances a factor 2 apart, the
+// local minima of their misfit refined, the best start run, and a second one within 25 % of its
+// misfit run too (the lower final misfit wins).
 //
 // Units: the lights' positions, the surface points and the depth share one unit (mm for a capture
 // in the near-light layout); camera frame of SPEC.md, the eye at the origin.
@@ -87,21 +94,22 @@ NearResult SolveNearLights(solve::PhotometricData data, const geometry::HeightMa
 
 // The images' misfit with the surface at `depth` (per pixel of data: distance along the axis):
 // each of `sample` refits its normal from `normals` (per pixel of data) with the lights seen
-// from its point, and the censored costs in image units (solve::PixelFitter::ImageCost) are
-// summed.
+// from its point, as a Lambertian surface on the observations where `fit`'s lobe is negligible
+// at that normal (highlights left out, and censored above as shadows are below), and the
+// censored costs in image units (solve::PixelFitter::ImageCost) are summed. Only the diffuse
+// term places the surface: the lobe's per-pixel coefficient is what a pixel's few highlights
+// leave uncertain, and every estimate of it moved the minimum (near.cc).
 double SurfaceCost(const solve::PhotometricData& data, const geometry::HeightMapFrame& frame,
                    const std::vector<double>& depth, const std::vector<Vec3d>& normals,
                    const std::vector<std::size_t>& sample, const solve::PixelFitSettings& fit,
                    int threads);
 
-// The surface's free number — the depth's scale (perspective) or its offset along the axis
-// (orthographic) — as the pixels' fits choose it: each of `sample` (positions in data) refits its
-// normal from `normals` (the last pass's, per pixel of data) with the lights seen from its point
-// on `value`·scale (or `value` + offset), and the candidate whose censored costs, in units of
-// each pixel's t², sum lowest wins; a grid over a factor `range` either way, then golden section.
-// Returns the factor (perspective) or the offset (orthographic) to apply.
+// The surface's free number — the depth's scale (perspective) or its distance along the axis
+// (orthographic) — as the images choose it: the factor on the surface's mean distance (the
+// depth scaled, or shifted by the mean times factor − 1) whose SurfaceCost is lowest, over a
+// grid from 1/range to range in steps of at most √2, then golden section to 0.05 %.
 double ChooseSurfaceOffset(const solve::PhotometricData& data,
-                           const geometry::HeightMapFrame& frame, const std::vector<double>& value,
+                           const geometry::HeightMapFrame& frame, const std::vector<double>& depth,
                            const std::vector<Vec3d>& normals,
                            const std::vector<std::size_t>& sample,
                            const solve::PixelFitSettings& fit, double range, int threads);
