@@ -117,6 +117,13 @@ void RunNormals(const NormalsCommandOptions& o) {
     const NormalsMemory memory =
         EstimateNormalsMemory(capture, NormalOptionsFor(o, capture.dataset()), o.common.threads);
     const double limit = static_cast<double>(load.memory.resolved());
+    if ((memory.whole_bytes > limit || o.band_rows > 0) && capture.dataset().files.near.present()) {
+      throw ResourceError(o.dataset +
+                          ": a near-light capture is solved whole (its surface "
+                          "places every pixel's lights): it needs " +
+                          FormatBytes(memory.whole_bytes) + ", more than the memory limit of " +
+                          FormatBytes(limit) + (o.band_rows > 0 ? " (--band-rows)" : ""));
+    }
     if (memory.whole_bytes > limit || o.band_rows > 0) {
       const int rows = o.band_rows > 0 ? std::min(o.band_rows, capture.height())
                                        : memory.BandRows(limit, capture.height());
@@ -162,7 +169,15 @@ void RunNormals(const NormalsCommandOptions& o) {
                              " image(s) the coefficients must be known, kd (a uniform albedo) "
                              "included");
   }
-  const solve::NormalResult result = solve::RecoverNormals(data, options);
+  std::optional<NearRun> near_run;
+  if (dataset.files.near.present()) {
+    near_run = SolveNearCapture(o, dataset, data, options);
+  } else if (o.distance > 0) {
+    throw std::runtime_error(o.dataset + ": --distance is for near-light captures (" +
+                             "light_positions.txt and camera.json)");
+  }
+  const solve::NormalResult result =
+      near_run ? near_run->result.normals : solve::RecoverNormals(data, options);
   options.progress = nullptr;
   fit_progress.reset();  // clears its line
   const ImageF& ambiguity = result.ambiguity_deg;
@@ -250,9 +265,10 @@ void RunNormals(const NormalsCommandOptions& o) {
   if (errors)
     io::WriteErrorMap(out.file("error.png"), errors->error_deg, dataset.mask,
                       io::ErrorMapScale(errors->error_deg, dataset.mask));
+  if (near_run) WriteNearOutputs(out, *near_run, dataset, metrics, o.common);
   std::optional<io::SurfaceFiles> surface;
   integrate::IntegrateResult heights;
-  if (o.integrate) {
+  if (o.integrate && !near_run) {
     // Pixels the solver flagged (residual −1: dark everywhere or too few lights) carry a
     // placeholder normal and are left out; silhouette normals may tip slightly past 90°.
     Mask with_normal = dataset.mask;
@@ -280,7 +296,11 @@ void RunNormals(const NormalsCommandOptions& o) {
   out.Commit();
   PrintJson(o.common, metrics.dump(2));
 
-  if (ambiguity.pixels.empty()) {
+  if (near_run) {
+    Say(o.common, "%zu pixels x %d images, model %s: load %.2f s, near-light loop %.2f s\n",
+        data.pixel_count(), data.images, reflectance::LobeName(result.model).c_str(), load_seconds,
+        near_run->result.seconds);
+  } else if (ambiguity.pixels.empty()) {
     Say(o.common,
         "%zu pixels x %d images, model %s: load %.2f s, Woodham %.2f s, model choice %.2f s, "
         "search and fit %.2f s\n",
@@ -306,6 +326,17 @@ void RunNormals(const NormalsCommandOptions& o) {
         "flagged -1 in residual.exr\n",
         result.summary.dark_pixels, result.summary.underdetermined_pixels);
   }
+  if (near_run) {
+    const near::NearResult& r = near_run->result;
+    char depth[96] = "";
+    if (metrics["near_lights"].contains("depth_rmse_mm")) {
+      std::snprintf(depth, sizeof depth, ", depth RMSE %.3g mm against Depth_gt.mat",
+                    metrics["near_lights"]["depth_rmse_mm"].get<double>());
+    }
+    Say(o.common, "Near lights: %zu passes (%s), the object %.4g mm from the camera%s\n",
+        r.passes.size(), r.converged ? "the normals settled" : "stopped before they settled",
+        r.distance, depth);
+  }
   if (errors) {
     Say(o.common,
         "Angular error against the ground truth: mean %.2f deg, median %.2f deg "
@@ -327,7 +358,8 @@ void RunNormals(const NormalsCommandOptions& o) {
       result.material_estimated ? ", material.json" : "", specular_map ? ", specular.exr" : "",
       errors ? ", error.png" : "", ambiguity.pixels.empty() ? "" : ", ambiguity.exr",
       result.model_map.pixels.empty() ? "" : ", model.exr",
-      surface ? ", height.exr, mesh.ply, height.png, integrate.json" : "");
+      surface || near_run ? ", height.exr, mesh.ply, height.png, integrate.json" : "");
+  if (near_run) Say(o.common, "  and depth.exr (mm along the optical axis), the mesh in mm\n");
 }
 
 struct EvalOptions {
@@ -430,7 +462,12 @@ void AddNormalsCommand(CLI::App& app) {
                   "does not fit in --memory-limit, in bands that do; the result is the same)")
       ->check(CLI::Range(1, 1 << 30));
   cmd->add_flag("--integrate", o->integrate,
-                "Also integrate the normals: height.exr, mesh.ply (albedo colours), height.png");
+                "Also integrate the normals: height.exr, mesh.ply (albedo colours), height.png "
+                "(near-light captures always: in mm)");
+  cmd->add_option("--distance", o->distance,
+                  "Near-light captures: the object's distance from the camera along its axis, "
+                  "mm, a first guess (default: from the lights' layout, else from the images)")
+      ->check(Positive());
   AddCaptureOptions(cmd, o->capture);
   AddOverwriteOption(cmd, o->common);
   AddThreadsOption(cmd, o->common);

@@ -98,7 +98,11 @@ void RunRender(const RenderCommandOptions& o) {
       o.output_dir.c_str(),
       o.per_light ? ("001" + file.output.extension() +
                      " ... with filenames.txt, "
-                     "light_directions.txt, light_intensities.txt")
+                     "light_directions.txt, light_intensities.txt" +
+                     (file.scene.lighting.HasPointLights()
+                          ? std::string(", light_positions.txt, camera.json, Depth_gt.mat "
+                                        "(near lights: scene units as mm)")
+                          : std::string()))
                         .c_str()
                   : ("image" + file.output.extension()).c_str());
 }

@@ -9,6 +9,7 @@
 #include "io/capture_bands.h"
 #include "io/output_folder.h"
 #include "iphong/commands.h"
+#include "near/near.h"
 #include "solve/normals.h"
 
 namespace iphong::cli {
@@ -25,7 +26,8 @@ struct NormalsCommandOptions {
   bool fast = false;
   bool integrate = false;
   bool estimate_intensities = false;
-  int band_rows = 0;  // > 0: in bands of this many rows whatever the memory limit
+  double distance = 0;  // near lights: the object's distance along the axis (mm), 0 = find it
+  int band_rows = 0;    // > 0: in bands of this many rows whatever the memory limit
   CaptureFlags capture;
   CommonOptions common;
 };
@@ -58,5 +60,19 @@ solve::NormalOptions NormalOptionsFor(const NormalsCommandOptions& o, const io::
 void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
                        io::CaptureBands& capture, int band_rows, const NormalsMemory& memory,
                        double started_seconds_ago);
+
+// A near-light capture's solve (normals_near.cc): the loop of near/near.h on the capture's point
+// lights, with the camera as the working images see it.
+struct NearRun {
+  near::NearResult result;
+  geometry::HeightMapFrame frame;
+};
+NearRun SolveNearCapture(const NormalsCommandOptions& o, const io::Dataset& d,
+                         const solve::PhotometricData& observations,
+                         const solve::NormalOptions& options);
+// depth.exr (mm along the axis, 0 outside), the surface files (mesh.ply in mm, height.png) and
+// metrics.json's "near_lights" (passes, distance, depth RMSE against Depth_gt.mat).
+void WriteNearOutputs(io::OutputFolder& out, const NearRun& run, const io::Dataset& d,
+                      nlohmann::json& metrics, const CommonOptions& common);
 
 }  // namespace iphong::cli

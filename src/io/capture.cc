@@ -232,7 +232,11 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
     const fs::path list = dir / "filenames.txt";
     c.names = ParseFilenames(ReadTextFile(list.string()), list.string());
     c.order = "filenames.txt";
-    if (light_file.empty() && options.lights_needed) light_file = dir / "light_directions.txt";
+    // A near-light capture may give positions alone.
+    if (light_file.empty() && options.lights_needed &&
+        (Exists(dir / "light_directions.txt") || !Exists(dir / "light_positions.txt"))) {
+      light_file = dir / "light_directions.txt";
+    }
   } else {
     if (light_file.empty() && options.lights_needed) light_file = FindLightFile(dir, files);
     fs::path list;
@@ -265,6 +269,11 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
   std::vector<std::string>* warnings = &c.warnings;
   if (!options.lights_needed) {
     c.lights_format = "none (not needed)";
+  } else if (c.layout == "DiLiGenT" && light_file.empty()) {
+    c.near = FindNearLights(directory, c.names.size(), warnings);
+    c.light_directions = DirectionsFromPositions(c.near);
+    c.lights_path = c.near.positions_path;
+    c.lights_format = "positions (near lights)";
   } else if (c.layout == "DiLiGenT" && options.lights.empty()) {
     c.light_directions =
         ParseLightDirections(ReadTextFile(c.lights_path), c.lights_path, c.names.size(), warnings);
@@ -289,6 +298,16 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
                               directory + " holds " + std::to_string(c.names.size()) + " images (" +
                               Range(c.names) +
                               "); list the images in filenames.txt, in light order");
+    }
+  }
+  if (options.lights_needed && !c.near.present()) {
+    c.near = FindNearLights(directory, c.names.size(), warnings);
+    if (c.near.present()) {
+      // Both files: the same lights, seen from one point (the object's).
+      std::vector<int> lines(c.light_directions.size());
+      for (std::size_t j = 0; j < lines.size(); ++j) lines[j] = static_cast<int>(j + 1);
+      CheckDirectionsAgree(c.near, c.light_directions, c.lights_path, lines);
+      c.lights_format += " with positions (near lights)";
     }
   }
   if (c.paths.empty()) {

@@ -11,7 +11,9 @@
 // The light file, unless named: light_directions.txt, lights.txt, lights.json or the one .lp in
 // the folder; the one .lp in its subfolders (RTIBuilder's assembly-files/); then lights.txt,
 // light_directions.txt or the one .lp in the parent folder (UW keeps one lights.txt beside its
-// objects). Any format of ParseLightFile (io/dataset_text.h). Intensities: light_intensities.txt,
+// objects). Any format of ParseLightFile (io/dataset_text.h). A DiLiGenT folder with
+// light_positions.txt is a near-light capture (io/near_capture.h), light_directions.txt then
+// optional. Intensities: light_intensities.txt,
 // else the light file's (AliceVision JSON), else all 1. The mask, unless named: mask.png, then
 // mask.* , <name>.mask.*, <name>_mask.* (an image file whose name without extension is "mask" or
 // ends in ".mask", "_mask" or "-mask"); none = the whole image. Ground truth: Normal_gt.mat or
@@ -24,6 +26,7 @@
 #include "core/image_ops.h"
 #include "core/types.h"
 #include "io/image_io.h"
+#include "io/near_capture.h"
 
 namespace iphong::io {
 
@@ -55,6 +58,9 @@ struct CaptureFiles {
   std::string ground_truth_path;  // "" = none
   std::string material_path;      // "" = none
   std::string render_json;        // iphong's own render.json, which states the encoding
+  // Near lights (io/near_capture.h): light_positions.txt and camera.json; light_directions are
+  // then the file's or, without one, those toward the positions from the object.
+  NearLightFiles near;
   std::vector<std::string> warnings;
 };
 

@@ -184,6 +184,22 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
       d.normal_gt = DownscaleNormals(d.normal_gt, capture.downscale);
     }
   }
+  if (options.load_ground_truth && !d.files.near.depth_gt_path.empty() && capture.downscale == 1) {
+    const std::string& truth = d.files.near.depth_gt_path;
+    d.depth_gt = ReadMatImage(truth, "Depth_gt", 1);
+    if (have_first && (d.depth_gt.width != d.file_width || d.depth_gt.height != d.file_height)) {
+      Fail(truth, "is " + SizeText(d.depth_gt.width, d.depth_gt.height) + ", the images are " +
+                      SizeText(d.file_width, d.file_height));
+    }
+    for (float v : d.depth_gt.pixels) {
+      if (!std::isfinite(v) || v < 0)
+        Fail(truth, "Depth_gt holds a value that is not a depth >= 0");
+    }
+    if (p.crop.width > 0) {
+      check_crop(d.depth_gt.width, d.depth_gt.height, truth);
+      d.depth_gt = CropImage(d.depth_gt, p.crop);
+    }
+  }
   p.counted_pixels = p.file_mask.count();
   d.image_counts.assign(d.filenames.size(), {});
   return p;

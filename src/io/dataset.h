@@ -41,6 +41,9 @@ struct Dataset {
   std::vector<Vec3d> light_intensities;  // RGB
   Mask mask;
   ImageF normal_gt;  // 3 channels; empty when the dataset has none
+  // Near-light captures: Depth_gt.mat (mm along the optical axis, 0 outside; 1 channel), empty
+  // when absent (or under --downscale, which would average depths across edges).
+  ImageF depth_gt;
   std::optional<DatasetMaterial> material;
   std::vector<std::string> warnings;  // e.g. light directions that were not unit
 

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <set>
 #include <stdexcept>
 
 #include "io/json_reader.h"
@@ -109,8 +110,10 @@ std::string FormatLp(const std::vector<std::string>& names, const std::vector<Ve
 }
 
 std::vector<Vec3d> ParseTriples(const std::string& text, const std::string& source,
-                                std::size_t expected, const std::string& count_source) {
+                                std::size_t expected, const std::string& count_source,
+                                std::vector<int>* lines) {
   std::vector<Vec3d> triples;
+  if (lines) lines->clear();
   for (const auto& [number, line] : Lines(text)) {
     if (triples.size() == expected) {
       Fail(source,
@@ -118,12 +121,102 @@ std::vector<Vec3d> ParseTriples(const std::string& text, const std::string& sour
            number);
     }
     triples.push_back(Triple(line, source, number));
+    if (lines) lines->push_back(number);
   }
   if (triples.size() != expected) {
     Fail(source, "has " + std::to_string(triples.size()) + " lines for " +
                      std::to_string(expected) + " images in " + count_source);
   }
   return triples;
+}
+
+std::vector<double> ParseScalars(const std::string& text, const std::string& source,
+                                 std::size_t expected, const std::string& count_source,
+                                 std::vector<int>* lines) {
+  std::vector<double> values;
+  if (lines) lines->clear();
+  for (const auto& [number, line] : Lines(text)) {
+    if (values.size() == expected) {
+      Fail(source,
+           "has more lines than the " + std::to_string(expected) + " images in " + count_source,
+           number);
+    }
+    if (line.find('\0') != std::string::npos) Fail(source, "not a text file", number);
+    const char* p = line.c_str();
+    char* end = nullptr;
+    const double value = std::strtod(p, &end);
+    if (end == p || std::string(end).find_first_not_of(" \t,") != std::string::npos) {
+      Fail(source, "expected one number, got '" + Shown(line) + "'", number);
+    }
+    if (!std::isfinite(value)) Fail(source, "not a finite number: '" + Shown(line) + "'", number);
+    values.push_back(value);
+    if (lines) lines->push_back(number);
+  }
+  if (values.size() != expected) {
+    Fail(source, "has " + std::to_string(values.size()) + " lines for " + std::to_string(expected) +
+                     " images in " + count_source);
+  }
+  return values;
+}
+
+CameraIntrinsics ParseCameraJson(const std::string& text, const std::string& source,
+                                 std::vector<std::string>* ignored) {
+  const nlohmann::json document = JsonReader::Parse(text, source);
+  const JsonReader j(document, source);
+  if (!document.is_object())
+    j.Fail("expected an object {\"fx\": ..., \"fy\": ..., \"cx\": ..., \"cy\": ...}");
+  const std::set<std::string> known = {"fx", "fy", "cx", "cy", "pixel_size"};
+  if (ignored) {
+    for (const auto& item : document.items()) {
+      if (!known.count(item.key())) ignored->push_back(item.key());
+    }
+  }
+  CameraIntrinsics c;
+  if (j.Has("pixel_size")) {
+    for (const char* key : {"fx", "fy", "cx", "cy"}) {
+      if (j.Has(key)) {
+        j.Fail("gives both pixel_size (an orthographic camera) and " + std::string(key) +
+               " (a perspective one)");
+      }
+    }
+    c.perspective = false;
+    c.pixel_size = j.Field("pixel_size").Number();
+    if (!(c.pixel_size > 0) || !std::isfinite(c.pixel_size) || c.pixel_size > 1e6) {
+      j.Field("pixel_size").Fail("expected a pixel size in mm > 0");
+    }
+    return c;
+  }
+  std::string missing;
+  for (const char* key : {"fx", "fy", "cx", "cy"}) {
+    if (!j.Has(key)) missing += std::string(missing.empty() ? "" : ", ") + key;
+  }
+  if (!missing.empty()) {
+    j.Fail("needs the four intrinsics fx, fy, cx, cy in pixels (missing " + missing +
+           "), or pixel_size in mm for an orthographic camera");
+  }
+  c.fx = j.Field("fx").Number();
+  c.fy = j.Field("fy").Number();
+  for (const char* key : {"fx", "fy"}) {
+    const double f = j.Field(key).Number();
+    if (!(f > 0) || !(f < 1e7)) j.Field(key).Fail("expected a focal length in pixels > 0");
+  }
+  const double cx = j.Field("cx").Number(), cy = j.Field("cy").Number();
+  if (!(std::abs(cx) < 1e7) || !(std::abs(cy) < 1e7)) {
+    j.Fail("expected a principal point cx, cy in pixels");
+  }
+  c.cx = cx + 0.5;
+  c.cy = cy + 0.5;
+  return c;
+}
+
+std::string FormatCameraJson(const CameraIntrinsics& c) {
+  nlohmann::json j;
+  if (c.perspective) {
+    j = {{"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx - 0.5}, {"cy", c.cy - 0.5}};
+  } else {
+    j = {{"pixel_size", c.pixel_size}};
+  }
+  return j.dump(2) + "\n";
 }
 
 namespace {

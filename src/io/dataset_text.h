@@ -28,9 +28,31 @@ std::vector<std::string> ParseFilenames(const std::string& text, const std::stri
 
 // `expected` lines of three finite numbers (separated by spaces, tabs or commas); a count that
 // differs is reported against `count_source`, where the expected count came from.
+// `lines` (optional) receives each triple's line number in the file.
 std::vector<Vec3d> ParseTriples(const std::string& text, const std::string& source,
                                 std::size_t expected,
-                                const std::string& count_source = "filenames.txt");
+                                const std::string& count_source = "filenames.txt",
+                                std::vector<int>* lines = nullptr);
+
+// `expected` lines of one finite number each (light_anisotropy.txt), with their line numbers.
+std::vector<double> ParseScalars(const std::string& text, const std::string& source,
+                                 std::size_t expected,
+                                 const std::string& count_source = "filenames.txt",
+                                 std::vector<int>* lines = nullptr);
+
+// camera.json (SPEC.md "Near lights"): {"fx": …, "fy": …, "cx": …, "cy": …} in pixels, (cx, cy)
+// in OpenCV's convention (from the top-left, rows down, pixel centres at integers), or iphong's
+// {"pixel_size": …} (mm per pixel) for an orthographic camera centred on the image. Returned in
+// iphong's pixel convention (centres at col + 0.5, row + 0.5: cx + 0.5). Other keys are left
+// alone (other tools write "width", "distortion" …) and named in `ignored`.
+struct CameraIntrinsics {
+  bool perspective = true;
+  double fx = 0, fy = 0, cx = 0, cy = 0;  // iphong's convention
+  double pixel_size = 0;                  // orthographic, mm per pixel
+};
+CameraIntrinsics ParseCameraJson(const std::string& text, const std::string& source,
+                                 std::vector<std::string>* ignored = nullptr);
+std::string FormatCameraJson(const CameraIntrinsics& camera);
 
 // What ParseTriples and ParseLightFile read back: "x y z" per line (%.9g), as in
 // light_directions.txt, light_intensities.txt and light_positions.txt; and an RTI .lp, the

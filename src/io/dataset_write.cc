@@ -43,17 +43,86 @@ nlohmann::json MaterialJson(const render::Scene& scene, const render::RenderOpti
   return j;
 }
 
+// A scene point in the main camera's frame (origin at its eye or view centre).
+Vec3d ToCamera(const geometry::Camera& camera, const Vec3d& point) {
+  return camera.rotation * (point - camera.center);
+}
+
+// The mean of the visible surface's points, camera frame.
+Vec3d VisibleCentre(const geometry::Camera& camera, const render::RenderOutput& output) {
+  Vec3d sum = Vec3d::Zero();
+  std::size_t n = 0;
+  for (int row = 0; row < output.mask.height; ++row) {
+    for (int col = 0; col < output.mask.width; ++col) {
+      if (!output.mask.at(col, row)) continue;
+      const double depth =
+          output.depth.pixels[static_cast<std::size_t>(row) * output.mask.width + col];
+      sum += ToCamera(camera, camera.Unproject(col + 0.5, row + 0.5, depth));
+      ++n;
+    }
+  }
+  return n ? Vec3d(sum / static_cast<double>(n)) : Vec3d(0, 0, -1);
+}
+
+// The near-light layout's own files (io/near_capture.h), scene units taken as mm.
+void WriteNearLightFiles(OutputFolder& out, const std::string& prefix, const render::Scene& scene,
+                         const render::RenderOutput& output) {
+  auto file = [&](const std::string& name) { return out.file(prefix + name); };
+  std::vector<Vec3d> positions, axes;
+  std::string anisotropy;
+  bool leds = false;
+  for (const reflectance::Light& light : scene.lighting.lights) {
+    positions.push_back(ToCamera(scene.camera, light.position_cam));
+    axes.push_back(scene.camera.rotation * light.axis_cam);
+    anisotropy += std::to_string(light.anisotropy) + "\n";
+    leds = leds || light.anisotropy > 0;
+  }
+  WriteTextFile(file("light_positions.txt"), FormatTriples(positions));
+  if (leds) {
+    WriteTextFile(file("light_axes.txt"), FormatTriples(axes));
+    WriteTextFile(file("light_anisotropy.txt"), anisotropy);
+  }
+  CameraIntrinsics camera;
+  camera.perspective = scene.camera.type == geometry::CameraType::kPerspective;
+  camera.fx = scene.camera.fx;
+  camera.fy = scene.camera.fy;
+  camera.cx = scene.camera.cx;
+  camera.cy = scene.camera.cy;
+  camera.pixel_size = camera.perspective ? 0.0 : scene.camera.pixel_size();
+  WriteTextFile(file("camera.json"), FormatCameraJson(camera));
+  WriteMatImage(file("Depth_gt.mat"), "Depth_gt", output.depth);
+}
+
 }  // namespace
 
 std::string CheckDatasetLights(const render::Scene& scene) {
-  for (std::size_t j = 0; j < scene.lighting.lights.size(); ++j) {
-    if (scene.lighting.lights[j].type != reflectance::LightType::kDirectional) {
+  const auto& lights = scene.lighting.lights;
+  if (lights.empty()) return "";
+  const bool near = lights[0].type == reflectance::LightType::kPoint;
+  for (std::size_t j = 0; j < lights.size(); ++j) {
+    if ((lights[j].type == reflectance::LightType::kPoint) != near) {
+      return "light " + std::to_string(j + 1) + " is " + (near ? "directional" : "a point light") +
+             " and light 1 " + (near ? "a point light" : "directional") +
+             "; a per-light dataset has directional lights (DiLiGenT layout) or point lights "
+             "(the near-light layout), not both";
+    }
+    if (near && !lights[j].inverse_square_falloff) {
       return "light " + std::to_string(j + 1) +
-             " is a point light; per-light datasets (DiLiGenT layout) need directional lights";
+             " is a point light without falloff; the near-light layout models the "
+             "inverse-square law (set \"falloff\": true)";
     }
   }
   return "";
 }
+
+namespace {
+
+bool HasPointLights(const render::Scene& scene) {
+  return !scene.lighting.lights.empty() &&
+         scene.lighting.lights[0].type == reflectance::LightType::kPoint;
+}
+
+}  // namespace
 
 void WriteDatasetFiles(OutputFolder& out, const std::string& prefix, const DatasetToWrite& d,
                        const OutputSettings& settings) {
@@ -116,12 +185,20 @@ void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const rende
   }
   auto file = [&](const std::string& name) { return out.file(prefix + name); };
   const std::string material = MaterialJson(scene, options).dump(2) + "\n";
+  const bool near = per_light && HasPointLights(scene);
+  if (near) WriteNearLightFiles(out, prefix, scene, output);
   if (per_light) {
     DatasetToWrite d;
+    // Near lights: the directions toward them from the visible surface's mean point, so a
+    // distant-light reader gets the lights as the object's centre sees them.
+    const Vec3d centre = near ? VisibleCentre(scene.camera, output) : Vec3d::Zero();
     for (std::size_t j = 0; j < output.per_light.size(); ++j) {
+      const reflectance::Light& light = scene.lighting.lights[j];
       d.images.push_back(&output.per_light[j]);
-      d.light_directions.push_back(scene.lighting.lights[j].direction_cam);
-      d.light_intensities.push_back(scene.lighting.lights[j].diffuse_intensity);
+      d.light_directions.push_back(
+          near ? Vec3d((ToCamera(scene.camera, light.position_cam) - centre).normalized())
+               : light.direction_cam);
+      d.light_intensities.push_back(light.diffuse_intensity);
     }
     d.mask = &output.mask;
     d.normal_gt = &output.normal_cam;
@@ -150,6 +227,10 @@ void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const rende
   meta["camera"] =
       scene.camera.type == geometry::CameraType::kOrthographic ? "orthographic" : "perspective";
   meta["depth"] = "distance along the view axis in scene units; 0 outside the mask";
+  if (per_light && HasPointLights(scene)) {
+    meta["near_lights"] =
+        "light_positions.txt, camera.json and Depth_gt.mat in the camera frame, scene units as mm";
+  }
   meta["frame"] = "camera frame: x right, y up, z toward the viewer; row 0 at the top";
   meta["supersampling"] = options.supersampling;
   meta["shadows"] = options.shadows;

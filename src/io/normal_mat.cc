@@ -63,20 +63,22 @@ void CheckMat5Complete(const std::string& path) {
 
 }  // namespace
 
-void WriteNormalMat(const std::string& path, const std::string& variable, const ImageF& normals) {
-  const std::size_t h = normals.height, w = normals.width;
-  std::vector<double> data(h * w * 3);
+void WriteMatImage(const std::string& path, const std::string& variable, const ImageF& image) {
+  const std::size_t h = image.height, w = image.width, k = image.channels;
+  if (k != 1 && k != 3)
+    throw std::invalid_argument(path + ": a MATLAB image needs 1 or 3 channels");
+  std::vector<double> data(h * w * k);
   for (std::size_t r = 0; r < h; ++r)
     for (std::size_t c = 0; c < w; ++c)
-      for (std::size_t k = 0; k < 3; ++k)
-        data[r + h * (c + w * k)] = normals.pixels[3 * (r * w + c) + k];  // MATLAB: column-major
+      for (std::size_t i = 0; i < k; ++i)
+        data[r + h * (c + w * i)] = image.pixels[k * (r * w + c) + i];  // MATLAB: column-major
   // matio writes only to paths and can report success on a full disk: the file is synced, then
   // read back and compared value by value.
   mat_t* mat = Mat_CreateVer(path.c_str(), nullptr, MAT_FT_MAT5);
   if (mat == nullptr) throw OutputError(path + ": cannot write: cannot create the MATLAB file");
-  std::size_t dims[3] = {h, w, 3};
-  matvar_t* var =
-      Mat_VarCreate(variable.c_str(), MAT_C_DOUBLE, MAT_T_DOUBLE, 3, dims, data.data(), 0);
+  std::size_t dims[3] = {h, w, k};
+  matvar_t* var = Mat_VarCreate(variable.c_str(), MAT_C_DOUBLE, MAT_T_DOUBLE, k == 3 ? 3 : 2, dims,
+                                data.data(), 0);
   const bool ok = var != nullptr && Mat_VarWrite(mat, var, MAT_COMPRESSION_ZLIB) == 0;
   if (var) Mat_VarFree(var);
   if (Mat_Close(mat) != 0 || !ok) {
@@ -85,15 +87,14 @@ void WriteNormalMat(const std::string& path, const std::string& variable, const 
   SyncWrittenFile(path);
   bool same = false;
   try {
-    const ImageF back = ReadNormalMat(path, variable);
-    same = back.width == normals.width && back.height == normals.height &&
-           back.pixels == normals.pixels;
+    const ImageF back = ReadMatImage(path, variable, static_cast<int>(k));
+    same = back.width == image.width && back.height == image.height && back.pixels == image.pixels;
   } catch (const std::exception&) {
   }
   if (!same) throw OutputError(path + ": cannot write: the file read back differs (disk full?)");
 }
 
-ImageF ReadNormalMat(const std::string& path, const std::string& variable) {
+ImageF ReadMatImage(const std::string& path, const std::string& variable, int channels) {
   CheckMat5Complete(path);
   mat_t* mat = Mat_Open(path.c_str(), MAT_ACC_RDONLY);
   if (mat == nullptr) Fail(path, "not a MATLAB file matio can read");
@@ -102,14 +103,17 @@ ImageF ReadNormalMat(const std::string& path, const std::string& variable) {
     Mat_Close(mat);
     Fail(path, "has no variable " + variable);
   }
-  const bool shape_ok = info->rank == 3 && info->dims[2] == 3 && !info->isComplex &&
-                        info->dims[0] > 0 && info->dims[1] > 0 &&
+  const std::size_t k = static_cast<std::size_t>(channels);
+  const bool rank_ok = k == 3 ? info->rank == 3 && info->dims[2] == 3
+                              : info->rank == 2 || (info->rank == 3 && info->dims[2] == 1);
+  const bool shape_ok = rank_ok && !info->isComplex && info->dims[0] > 0 && info->dims[1] > 0 &&
                         info->dims[0] * info->dims[1] <= (std::size_t{1} << 31) &&
                         (info->class_type == MAT_C_DOUBLE || info->class_type == MAT_C_SINGLE);
   Mat_VarFree(info);
   if (!shape_ok) {
     Mat_Close(mat);
-    Fail(path, variable + " must be a real H x W x 3 array of double or single");
+    Fail(path, variable + " must be a real H x W" + (k == 3 ? " x 3" : "") +
+                   " array of double or single");
   }
   matvar_t* var = Mat_VarRead(mat, variable.c_str());
   Mat_Close(mat);
@@ -123,19 +127,27 @@ ImageF ReadNormalMat(const std::string& path, const std::string& variable) {
   } free_var{var};
   const std::size_t h = var->dims[0], w = var->dims[1];
   const std::size_t element = var->class_type == MAT_C_DOUBLE ? sizeof(double) : sizeof(float);
-  if (var->rank != 3 || var->dims[2] != 3 || var->nbytes < h * w * 3 * element) {
+  if (var->nbytes < h * w * k * element) {
     Fail(path, variable + " holds fewer values than its size says (corrupt file?)");
   }
-  ImageF normals(static_cast<int>(w), static_cast<int>(h), 3);
+  ImageF image(static_cast<int>(w), static_cast<int>(h), channels);
   auto value = [&](std::size_t i) -> double {
     return var->class_type == MAT_C_DOUBLE ? static_cast<const double*>(var->data)[i]
                                            : static_cast<const float*>(var->data)[i];
   };
   for (std::size_t r = 0; r < h; ++r)
     for (std::size_t c = 0; c < w; ++c)
-      for (std::size_t k = 0; k < 3; ++k)
-        normals.pixels[3 * (r * w + c) + k] = static_cast<float>(value(r + h * (c + w * k)));
-  return normals;
+      for (std::size_t i = 0; i < k; ++i)
+        image.pixels[k * (r * w + c) + i] = static_cast<float>(value(r + h * (c + w * i)));
+  return image;
+}
+
+void WriteNormalMat(const std::string& path, const std::string& variable, const ImageF& normals) {
+  WriteMatImage(path, variable, normals);
+}
+
+ImageF ReadNormalMat(const std::string& path, const std::string& variable) {
+  return ReadMatImage(path, variable, 3);
 }
 
 }  // namespace iphong::io

@@ -1,4 +1,5 @@
-// MATLAB files holding a normal map (DiLiGenT's Normal_gt.mat), read and written with matio.
+// MATLAB files holding a normal map (DiLiGenT's Normal_gt.mat) or a depth map (Depth_gt.mat),
+// read and written with matio.
 #pragma once
 
 #include <string>
@@ -12,5 +13,9 @@ namespace iphong::io {
 // truncated compressed array as zeros without a word.
 void WriteNormalMat(const std::string& path, const std::string& variable, const ImageF& normals);
 ImageF ReadNormalMat(const std::string& path, const std::string& variable);
+
+// The same for 1 (H×W: a depth map, Depth_gt) or 3 channels.
+void WriteMatImage(const std::string& path, const std::string& variable, const ImageF& image);
+ImageF ReadMatImage(const std::string& path, const std::string& variable, int channels);
 
 }  // namespace iphong::io

@@ -104,9 +104,66 @@ std::vector<Light> ParseLight(const JsonReader& j) {
       return {Light::Directional(j.Field("direction").Vector3(), intensity, specular)};
     }
     if (type == "point") {
-      j.OnlyKeys({"type", "position", "intensity", "specular_intensity", "falloff"});
-      return {Light::Point(j.Field("position").Vector3(), intensity, specular,
-                           j.Bool("falloff", true))};
+      j.OnlyKeys(
+          {"type", "position", "intensity", "specular_intensity", "falloff", "axis", "anisotropy"});
+      Light light =
+          Light::Point(j.Field("position").Vector3(), intensity, specular, j.Bool("falloff", true));
+      if (j.Has("axis") || j.Has("anisotropy")) {
+        // An LED (SPEC.md "Near lights"): its intensity toward a point scales by cos^μ of the
+        // angle from its axis.
+        const Light led = Light::Led(light.position_cam, intensity,
+                                     j.Vector3("axis", Vec3d(0, 0, -1)), j.Number("anisotropy", 0));
+        light.axis_cam = led.axis_cam;
+        light.anisotropy = led.anisotropy;
+      }
+      return {light};
+    }
+    if (type == "point_dome" || type == "point_ring") {
+      // Near-light rigs: `count` point lights (LEDs aimed at `target` when `anisotropy` > 0).
+      // point_dome: on a sphere of `radius` round `center`, a Fibonacci spiral between two
+      // elevations above the plane facing the camera; point_ring: on a circle of `radius` round
+      // the optical axis in the plane z = `z` (a ring round the lens at z 0).
+      const bool dome = type == "point_dome";
+      if (dome) {
+        j.OnlyKeys({"type", "count", "center", "radius", "min_elevation_deg", "max_elevation_deg",
+                    "intensity", "specular_intensity", "anisotropy"});
+      } else {
+        j.OnlyKeys({"type", "count", "radius", "z", "target", "azimuth_offset_deg", "intensity",
+                    "specular_intensity", "anisotropy"});
+      }
+      const int count = IntegerIn(j, "count", 24, 1, 100000);
+      const double radius = j.Number("radius", 3);
+      if (!(radius > 0) || !(radius < 1e12)) j.Field("radius").Fail("expected a radius > 0");
+      const double mu = j.Number("anisotropy", 0);
+      std::vector<Light> lights;
+      if (dome) {
+        const Vec3d center = j.Vector3("center", Vec3d::Zero());
+        const double lo = j.Number("min_elevation_deg", 20), hi = j.Number("max_elevation_deg", 75);
+        if (!(lo >= 0 && lo <= hi && hi <= 90)) {
+          j.Fail("elevations must satisfy 0 <= min_elevation_deg <= max_elevation_deg <= 90");
+        }
+        const double golden = M_PI * (3 - std::sqrt(5.0));
+        for (int i = 0; i < count; ++i) {
+          const double e = (lo + (hi - lo) * (i + 0.5) / count) * kDeg;
+          const Vec3d d(std::cos(e) * std::cos(golden * i), std::cos(e) * std::sin(golden * i),
+                        std::sin(e));
+          lights.push_back(Light::Led(center + radius * d, intensity, -d, mu));
+          lights.back().specular_intensity = specular;
+        }
+      } else {
+        const double z = j.Number("z", 0);
+        const Vec3d target = j.Vector3("target", Vec3d(0, 0, z - 1));
+        const double offset = j.Number("azimuth_offset_deg", 0) * kDeg;
+        for (int i = 0; i < count; ++i) {
+          const double a = offset + 2 * M_PI * i / count;
+          const Vec3d position(radius * std::cos(a), radius * std::sin(a), z);
+          const Vec3d aim = target - position;
+          lights.push_back(
+              Light::Led(position, intensity, aim.norm() > 0 ? aim : Vec3d(0, 0, -1), mu));
+          lights.back().specular_intensity = specular;
+        }
+      }
+      return lights;
     }
     if (type == "ring") {
       // `count` lights evenly around the view axis at one elevation above the image plane.
@@ -144,7 +201,8 @@ std::vector<Light> ParseLight(const JsonReader& j) {
     j.Fail(e.what());
   }
   j.Field("type").Fail("unknown light type '" + type +
-                       "' (expected directional, point, ring or hemisphere)");
+                       "' (expected directional, point, ring, hemisphere, point_dome or "
+                       "point_ring)");
 }
 
 Eigen::Affine3d ParseTransform(const JsonReader& object) {

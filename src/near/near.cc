@@ -338,6 +338,29 @@ class Loop {
     if (o_.log) o_.log(line);
   }
 
+  // The ambient term the surface is placed with while the model is not chosen yet (the plan
+  // then chooses its own with the lobe): the estimate (solve::EstimateAmbient) or none, whichever
+  // fits the images better at the current surface. A constant left in the observations is
+  // explained by the fall-off of lights at a wrong distance (a dome's sphere went from 464 to
+  // 212 mm under an ambient of 1 % of its brightness).
+  void ChooseAmbient() {
+    if (o_.normals.material_known || !o_.normals.ambient_term.isZero()) return;
+    const Vec3d ambient = solve::EstimateAmbient(data_);
+    if (ambient.isZero()) return;
+    double best = INFINITY;
+    Vec3d chosen = Vec3d::Zero();
+    for (const Vec3d& reading : {Vec3d(Vec3d::Zero()), ambient}) {
+      woodham_.ambient_term = reading;
+      lambert_fit_.ambient_term = reading;
+      const solve::NormalResult w = solve::EstimateNormals(data_, woodham_);
+      const double c = SurfaceCost(data_, frame_, depth_, NormalsPerPixel(w, data_), sample_,
+                                   lambert_fit_, o_.normals.threads);
+      if (c < best) best = c, chosen = reading;
+    }
+    woodham_.ambient_term = chosen;
+    lambert_fit_.ambient_term = chosen;
+  }
+
   void Place(const std::vector<double>& depth) {
     depth_ = depth;
     data_.points_cam = SurfacePoints(data_, frame_, depth_);
@@ -359,6 +382,8 @@ class Loop {
   // misfit refined by two rounds of Woodham, integration and the surface's distance; by misfit.
   std::vector<std::pair<double, std::vector<double>>> Scan(double distance) {
     std::vector<std::pair<double, std::vector<double>>> grid, minima;
+    Place(std::vector<double>(data_.pixel_count(), distance));
+    ChooseAmbient();
     for (int i = -4; i <= 4; ++i) {
       Place(std::vector<double>(data_.pixel_count(), distance * std::pow(2.0, i)));
       const double c = WoodhamSurface();
@@ -391,6 +416,7 @@ class Loop {
   // with starts) instead of searching: a start only compared with another.
   NearResult Run(const std::vector<double>& depth, double* cost, bool warm_plan = false) {
     Place(depth);
+    ChooseAmbient();
     const std::size_t pixels = data_.pixel_count();
     NearResult result;
     int woodham_passes = o_.woodham_passes;

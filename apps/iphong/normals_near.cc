@@ -1,0 +1,191 @@
+// `iphong normals` on a near-light capture (io/near_capture.h): the capture's point lights, the
+// loop of near/near.h, and what it adds to the outputs — depth.exr and the mesh in mm, and
+// metrics.json's "near_lights".
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "core/timing.h"
+#include "io/files.h"
+#include "io/image_io.h"
+#include "io/surface.h"
+#include "iphong/console.h"
+#include "iphong/normals_command.h"
+#include "near/near.h"
+
+namespace iphong::cli {
+namespace {
+
+// The camera of the files, as the working images (--crop, --downscale) see it.
+geometry::HeightMapFrame WorkingFrame(const NormalsCommandOptions& o, const io::Dataset& d) {
+  geometry::HeightMapFrame frame = d.files.near.frame();
+  const io::CaptureOptions capture = o.capture.resolved();
+  if (capture.crop.width > 0) {
+    if (!frame.perspective) {
+      throw std::runtime_error(d.files.near.camera_path +
+                               ": an orthographic camera is centred on the whole image; --crop "
+                               "of an orthographic near-light capture is not supported");
+    }
+    frame.cx -= capture.crop.x;
+    frame.cy -= capture.crop.y;
+  }
+  const double s = capture.downscale;
+  frame.fx /= s;
+  frame.fy /= s;
+  frame.cx /= s;
+  frame.cy /= s;
+  if (!frame.perspective) frame.pixel_size *= s;
+  return frame;
+}
+
+// A light at the surface (where 1/d² has no meaning: within 5 % of the object's radius) or
+// inside the object (behind its visible
+// surface, as the camera sees it): one line naming light_positions.txt's line.
+void CheckLightsOutsideSurface(const io::NearLightFiles& files, const near::NearResult& r,
+                               const geometry::HeightMapFrame& frame, const Mask& mask) {
+  std::vector<Vec3d> points;
+  Vec3d mean = Vec3d::Zero();
+  for (std::size_t p = 0; p < mask.inside.size(); ++p) {
+    if (!mask.inside[p] || !(r.depth.pixels[p] > 0)) continue;
+    const float* x = r.points.pixels.data() + 3 * p;
+    points.emplace_back(x[0], x[1], x[2]);
+    mean += points.back();
+  }
+  if (points.empty()) return;
+  mean /= static_cast<double>(points.size());
+  double extent = 0;
+  for (const Vec3d& x : points) extent = std::max(extent, (x - mean).norm());
+  for (std::size_t j = 0; j < files.positions_mm.size(); ++j) {
+    const Vec3d& s = files.positions_mm[j];
+    double nearest = INFINITY;
+    for (const Vec3d& x : points) nearest = std::min(nearest, (x - s).norm());
+    char text[320];
+    // Within a twentieth of the object's radius of its surface, a millimetre's error in the
+    // surface changes that light's 1/d² by tens of percent: no fit can stand on it.
+    if (nearest < 0.05 * extent) {
+      std::snprintf(text, sizeof text,
+                    "light %zu is at the object's surface (%.3g mm from it, the object %.3g mm "
+                    "across): the inverse-square law has no meaning there",
+                    j + 1, nearest, 2 * extent);
+      throw std::runtime_error(files.positions_path + ":" +
+                               std::to_string(files.position_lines[j]) + ": " + text);
+    }
+    // Where the camera sees the light: behind the surface there, it is inside or behind the
+    // object and cannot light what the camera sees.
+    double u = 0, v = 0;
+    if (frame.perspective) {
+      if (!(s.z() < 0)) continue;
+      u = frame.cx + frame.fx * s.x() / -s.z();
+      v = frame.cy - frame.fy * s.y() / -s.z();
+    } else {
+      u = s.x() / frame.pixel_size + mask.width / 2.0;
+      v = mask.height / 2.0 - s.y() / frame.pixel_size;
+    }
+    const int col = static_cast<int>(std::floor(u)), row = static_cast<int>(std::floor(v));
+    if (col < 0 || row < 0 || col >= mask.width || row >= mask.height || !mask.at(col, row)) {
+      continue;
+    }
+    const double surface = r.depth.pixels[static_cast<std::size_t>(row) * mask.width + col];
+    if (surface > 0 && -s.z() > surface + 0.01 * extent) {
+      std::snprintf(text, sizeof text,
+                    "light %zu is inside or behind the object (%.4g mm deep where the surface "
+                    "at pixel (%d, %d) is %.4g mm): it cannot light what the camera sees",
+                    j + 1, -s.z(), col, row, surface);
+      throw std::runtime_error(files.positions_path + ":" +
+                               std::to_string(files.position_lines[j]) + ": " + text);
+    }
+  }
+}
+
+}  // namespace
+
+NearRun SolveNearCapture(const NormalsCommandOptions& o, const io::Dataset& d,
+                         const solve::PhotometricData& observations,
+                         const solve::NormalOptions& options) {
+  NearRun run;
+  run.frame = WorkingFrame(o, d);
+  if (observations.images < 3) {
+    throw std::runtime_error(d.files.near.positions_path +
+                             ": near-light photometric stereo needs at least 3 images");
+  }
+  solve::PhotometricData data = observations;
+  data.point_lights = io::NearPointLights(d.files.near, observations.light_intensities);
+  near::NearOptions near_options;
+  near_options.normals = options;
+  near_options.distance = o.distance;
+  near_options.log = [&o](const std::string& line) {
+    Say(o.common, "  near lights: %s\n", line.c_str());
+  };
+  try {
+    run.result = near::SolveNearLights(std::move(data), run.frame, near_options);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(o.dataset + ": " + e.what());
+  }
+  CheckLightsOutsideSurface(d.files.near, run.result, run.frame, d.mask);
+  if (run.result.distance_from_images) {
+    Warn(d.files.near.positions_path +
+         ": the lights' layout does not say how far the object is (no LED axes meeting at it, "
+         "no dome round it); the images put it at " +
+         std::to_string(static_cast<int>(std::lround(run.result.distance))) +
+         " mm: give --distance MM if you know better");
+  }
+  return run;
+}
+
+void WriteNearOutputs(io::OutputFolder& out, const NearRun& run, const io::Dataset& d,
+                      nlohmann::json& metrics, const CommonOptions& common) {
+  const near::NearResult& r = run.result;
+  io::WriteImage(out.file("depth.exr"), r.depth);
+  // The surface the loop ended on, as a mesh in mm (io::WriteSurfaceFiles: height.exr is the
+  // depth there, NaN outside).
+  integrate::IntegrateResult surface;
+  surface.height = ImageF(r.depth.width, r.depth.height, 1, NAN);
+  surface.continuity = ImageF(r.depth.width, r.depth.height, 2, 1.0f);
+  Mask placed = d.mask;
+  for (std::size_t p = 0; p < placed.inside.size(); ++p) {
+    placed.inside[p] =
+        placed.inside[p] && r.depth.pixels[p] > 0 && r.normals.residual.pixels[p] >= 0;
+    if (placed.inside[p]) {
+      surface.height.pixels[p] = run.frame.perspective ? r.depth.pixels[p] : -r.depth.pixels[p];
+    }
+  }
+  surface.summary.success = true;
+  surface.summary.message = "the near-light loop's last surface";
+  io::SurfaceFileOptions files;
+  files.albedo = &r.normals.albedo;
+  files.threads = common.threads;
+  const io::SurfaceFiles written =
+      io::WriteSurfaceFiles(out, "", surface, r.normals.normals, placed, run.frame, files);
+  nlohmann::json passes = nlohmann::json::array();
+  for (const near::NearPass& p : r.passes) {
+    passes.push_back({{"kind", p.kind},
+                      {"normals_moved_deg", p.change_deg},
+                      {"distance_mm", p.distance},
+                      {"seconds", p.seconds}});
+  }
+  nlohmann::json near{{"positions", d.files.near.positions_path},
+                      {"camera", d.files.near.camera_path},
+                      {"perspective", run.frame.perspective},
+                      {"distance_mm", r.distance},
+                      {"distance_from_images", r.distance_from_images},
+                      {"passes", passes},
+                      {"converged", r.converged},
+                      {"last_change_deg", r.last_change_deg},
+                      {"seconds", r.seconds},
+                      {"mesh_triangles", written.triangles}};
+  if (!d.depth_gt.pixels.empty() && d.depth_gt.width == r.depth.width &&
+      d.depth_gt.height == r.depth.height) {
+    double sq = 0;
+    std::size_t n = 0;
+    for (std::size_t p = 0; p < placed.inside.size(); ++p) {
+      if (!placed.inside[p] || !(d.depth_gt.pixels[p] > 0)) continue;
+      const double e = r.depth.pixels[p] - d.depth_gt.pixels[p];
+      sq += e * e;
+      ++n;
+    }
+    if (n > 0) near["depth_rmse_mm"] = std::sqrt(sq / n);
+  }
+  metrics["near_lights"] = near;
+}
+
+}  // namespace iphong::cli
