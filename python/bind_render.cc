@@ -9,6 +9,7 @@
 #include "arrays.h"
 #include "bindings.h"
 #include "io/dataset.h"
+#include "io/dataset_write.h"
 #include "io/scene_file.h"
 #include "render/renderer.h"
 
@@ -16,6 +17,20 @@ namespace py = pybind11;
 
 namespace iphong::python {
 namespace {
+
+// camera.json's content as a dict: fx, fy, cx, cy (OpenCV's principal point) or pixel_size.
+py::dict CameraDict(const io::CameraIntrinsics& c) {
+  py::dict out;
+  if (c.perspective) {
+    out["fx"] = c.fx;
+    out["fy"] = c.fy;
+    out["cx"] = c.cx - 0.5;
+    out["cy"] = c.cy - 0.5;
+  } else {
+    out["pixel_size"] = c.pixel_size;
+  }
+  return out;
+}
 
 py::dict RenderScene(io::SceneFile file, bool per_light, const MemoryLimit& memory) {
   render::RenderOutput out;
@@ -40,6 +55,18 @@ py::dict RenderScene(io::SceneFile file, bool per_light, const MemoryLimit& memo
   }
   result["light_directions"] = ToArray(directions);
   result["light_intensities"] = ToArray(intensities);
+  if (per_light && file.scene.lighting.HasPointLights()) {
+    if (std::string m = io::CheckDatasetLights(file.scene); !m.empty()) {
+      throw std::invalid_argument(m);
+    }
+    // The near-light layout's arrays (what `iphong render --per-light` writes).
+    const io::RenderedNearLights near = io::NearLightsOf(file.scene, out);
+    result["light_directions"] = ToArray(near.directions);
+    result["light_positions"] = ToArray(near.positions_mm);
+    result["light_axes"] = ToArray(near.axes);
+    result["light_anisotropy"] = near.anisotropy;
+    result["camera"] = CameraDict(near.camera);
+  }
   return result;
 }
 
@@ -110,6 +137,22 @@ void BindRender(py::module_& m) {
         } else {
           result["material"] = py::none();
         }
+        if (d.files.near.present()) {
+          const io::NearLightFiles& n = d.files.near;
+          result["light_positions"] = ToArray(n.positions_mm);
+          result["camera"] = CameraDict(n.camera);
+          result["light_axes"] =
+              n.axes.empty() ? py::object(py::none()) : py::object(ToArray(n.axes));
+          result["light_anisotropy"] =
+              n.anisotropy.empty() ? py::object(py::none()) : py::cast(n.anisotropy);
+          result["depth_gt"] =
+              d.depth_gt.pixels.empty() ? py::object(py::none()) : py::object(ToArray(d.depth_gt));
+        } else {
+          for (const char* key :
+               {"light_positions", "camera", "light_axes", "light_anisotropy", "depth_gt"}) {
+            result[key] = py::none();
+          }
+        }
         result["warnings"] = d.warnings;
         result["description"] = io::DescribeDataset(d);
         result["encoding"] = d.encoding.encoding == io::Encoding::kSrgb ? "srgb" : "linear";
@@ -131,7 +174,10 @@ UW, RTI .lp, a folder of images with a light file), with the same options (light
 mask: files; encoding "auto"/"linear"/"srgb"; crop (x, y, w, h) in the files' pixels; downscale N).
 Returns images (K, H, W, 3) float32 linear, light_directions (K, 3), light_intensities (K, 3),
 mask (H, W) bool, normal_gt (H, W, 3) or None, material (dict) or None, filenames, warnings,
-description (what was read, one line), encoding, image_counts (saturated and black pixels).
+description (what was read, one line), encoding, image_counts (saturated and black pixels); for a
+near-light capture (light_positions.txt) also light_positions (K, 3) mm, camera (camera.json's
+dict), light_axes (K, 3) and light_anisotropy (K) or None, depth_gt (H, W) mm or None (all None
+otherwise): what estimate_normals takes.
 Raises ValueError naming the file (and line) on bad input, and when the images would need more
 memory than max_memory_gb (default: three quarters of the machine's).)doc");
 }

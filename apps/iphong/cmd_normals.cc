@@ -176,13 +176,18 @@ void RunNormals(const NormalsCommandOptions& o) {
     throw std::runtime_error(o.dataset + ": --distance is for near-light captures (" +
                              "light_positions.txt and camera.json)");
   }
-  const solve::NormalResult result =
-      near_run ? near_run->result.normals : solve::RecoverNormals(data, options);
+  nlohmann::json metrics;
+  std::optional<near::EffectiveDistanceResult> effective;
+  if (!near_run && data.images >= 3) {
+    effective = SolveWithEffectiveDistance(o, data, options, metrics);
+  }
+  const solve::NormalResult result = near_run    ? near_run->result.normals
+                                     : effective ? effective->normals
+                                                 : solve::RecoverNormals(data, options);
   options.progress = nullptr;
   fit_progress.reset();  // clears its line
   const ImageF& ambiguity = result.ambiguity_deg;
 
-  nlohmann::json metrics;
   metrics["dataset"] = o.dataset;
   metrics["input"] = NormalsInputJson(dataset);
   metrics["pixels"] = data.pixel_count();
@@ -464,6 +469,11 @@ void AddNormalsCommand(CLI::App& app) {
   cmd->add_flag("--integrate", o->integrate,
                 "Also integrate the normals: height.exr, mesh.ply (albedo colours), height.png "
                 "(near-light captures always: in mm)");
+  cmd->add_option("--light-distance", o->light_distance,
+                  "Captures with light directions only: how far the lights are, in pixels of the "
+                  "images — auto (chosen by held-out prediction, distant lights among the "
+                  "candidates), inf (distant), or a number")
+      ->capture_default_str();
   cmd->add_option("--distance", o->distance,
                   "Near-light captures: the object's distance from the camera along its axis, "
                   "mm, a first guess (default: from the lights' layout, else from the images)")

@@ -9,6 +9,7 @@
 #include "io/capture_bands.h"
 #include "io/output_folder.h"
 #include "iphong/commands.h"
+#include "near/effective_distance.h"
 #include "near/near.h"
 #include "solve/normals.h"
 
@@ -27,7 +28,10 @@ struct NormalsCommandOptions {
   bool integrate = false;
   bool estimate_intensities = false;
   double distance = 0;  // near lights: the object's distance along the axis (mm), 0 = find it
-  int band_rows = 0;    // > 0: in bands of this many rows whatever the memory limit
+  // Directions only: "auto" (chosen by held-out prediction, ∞ among the candidates), "inf"
+  // (distant lights) or a distance in pixels.
+  std::string light_distance = "auto";
+  int band_rows = 0;  // > 0: in bands of this many rows whatever the memory limit
   CaptureFlags capture;
   CommonOptions common;
 };
@@ -70,6 +74,14 @@ struct NearRun {
 NearRun SolveNearCapture(const NormalsCommandOptions& o, const io::Dataset& d,
                          const solve::PhotometricData& observations,
                          const solve::NormalOptions& options);
+// Directions only (near/effective_distance.h): the distant solve and, unless --light-distance
+// inf, the effective distance chosen (or given) and the near passes; metrics.json's
+// "effective_distance".
+near::EffectiveDistanceResult SolveWithEffectiveDistance(const NormalsCommandOptions& o,
+                                                         const solve::PhotometricData& data,
+                                                         const solve::NormalOptions& options,
+                                                         nlohmann::json& metrics);
+
 // depth.exr (mm along the axis, 0 outside), the surface files (mesh.ply in mm, height.png) and
 // metrics.json's "near_lights" (passes, distance, depth RMSE against Depth_gt.mat).
 void WriteNearOutputs(io::OutputFolder& out, const NearRun& run, const io::Dataset& d,

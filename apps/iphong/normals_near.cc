@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "core/timing.h"
 #include "io/files.h"
@@ -123,13 +124,74 @@ NearRun SolveNearCapture(const NormalsCommandOptions& o, const io::Dataset& d,
   }
   CheckLightsOutsideSurface(d.files.near, run.result, run.frame, d.mask);
   if (run.result.distance_from_images) {
+    std::string others;
+    for (double other : run.result.other_distances) {
+      others += (others.empty() ? " (or, as well, at " : " or ") +
+                std::to_string(static_cast<int>(std::lround(other))) + " mm";
+    }
+    if (!others.empty()) others += ": the images do not decide)";
     Warn(d.files.near.positions_path +
          ": the lights' layout does not say how far the object is (no LED axes meeting at it, "
          "no dome round it); the images put it at " +
-         std::to_string(static_cast<int>(std::lround(run.result.distance))) +
-         " mm: give --distance MM if you know better");
+         std::to_string(static_cast<int>(std::lround(run.result.distance))) + " mm" + others +
+         ": give --distance MM if you know better");
   }
   return run;
+}
+
+near::EffectiveDistanceResult SolveWithEffectiveDistance(const NormalsCommandOptions& o,
+                                                         const solve::PhotometricData& data,
+                                                         const solve::NormalOptions& options,
+                                                         nlohmann::json& metrics) {
+  near::EffectiveDistanceOptions e;
+  e.normals = options;
+  if (o.light_distance == "inf") {
+    e.distance_px = INFINITY;
+  } else if (o.light_distance != "auto") {
+    char* end = nullptr;
+    e.distance_px = std::strtod(o.light_distance.c_str(), &end);
+    if (end == o.light_distance.c_str() || *end != '\0' || !(e.distance_px > 0)) {
+      throw std::invalid_argument(
+          "--light-distance: expected auto, inf or a distance in pixels "
+          "> 0, got '" +
+          o.light_distance + "'");
+    }
+  }
+  e.log = [&o](const std::string& line) { Say(o.common, "  %s\n", line.c_str()); };
+  near::EffectiveDistanceResult r;
+  try {
+    r = near::SolveEffectiveDistance(data, e);
+  } catch (const std::invalid_argument& err) {
+    throw std::runtime_error(o.dataset + ": " + err.what());
+  }
+  if (o.light_distance == "inf") return r;
+  nlohmann::json candidates = nlohmann::json::array();
+  for (const near::DistanceCandidate& c : r.scored) {
+    candidates.push_back(
+        {{"distance_px",
+          std::isinf(c.distance_px) ? nlohmann::json("inf") : nlohmann::json(c.distance_px)},
+         {"test", c.criterion},
+         {"heldout_cost", c.heldout_cost},
+         {"heldout_error", c.heldout_error}});
+  }
+  nlohmann::json passes = nlohmann::json::array();
+  for (const near::NearPass& p : r.passes) {
+    passes.push_back({{"normals_moved_deg", p.change_deg}, {"seconds", p.seconds}});
+  }
+  metrics["effective_distance"] = {
+      {"distance_px",
+       std::isinf(r.distance_px) ? nlohmann::json("inf") : nlohmann::json(r.distance_px)},
+      {"chosen", r.chosen},
+      {"object_size_px", r.object_size_px},
+      {"test", r.criterion},
+      {"heldout_gain", r.gain},
+      {"heldout_gain_error", r.gain_error},
+      {"candidates", candidates},
+      {"passes", passes},
+      {"distant_seconds", r.distant_seconds},
+      {"choice_seconds", r.choice_seconds},
+      {"seconds", r.seconds}};
+  return r;
 }
 
 void WriteNearOutputs(io::OutputFolder& out, const NearRun& run, const io::Dataset& d,

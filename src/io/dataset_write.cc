@@ -64,32 +64,43 @@ Vec3d VisibleCentre(const geometry::Camera& camera, const render::RenderOutput& 
   return n ? Vec3d(sum / static_cast<double>(n)) : Vec3d(0, 0, -1);
 }
 
+}  // namespace
+
+RenderedNearLights NearLightsOf(const render::Scene& scene, const render::RenderOutput& output) {
+  RenderedNearLights near;
+  const Vec3d centre = VisibleCentre(scene.camera, output);
+  for (const reflectance::Light& light : scene.lighting.lights) {
+    const Vec3d position = ToCamera(scene.camera, light.position_cam);
+    near.positions_mm.push_back(position);
+    near.axes.push_back(scene.camera.rotation * light.axis_cam);
+    near.anisotropy.push_back(light.anisotropy);
+    near.directions.push_back((position - centre).normalized());
+    near.leds = near.leds || light.anisotropy > 0;
+  }
+  near.camera.perspective = scene.camera.type == geometry::CameraType::kPerspective;
+  near.camera.fx = scene.camera.fx;
+  near.camera.fy = scene.camera.fy;
+  near.camera.cx = scene.camera.cx;
+  near.camera.cy = scene.camera.cy;
+  near.camera.pixel_size = near.camera.perspective ? 0.0 : scene.camera.pixel_size();
+  return near;
+}
+
+namespace {
+
 // The near-light layout's own files (io/near_capture.h), scene units taken as mm.
 void WriteNearLightFiles(OutputFolder& out, const std::string& prefix, const render::Scene& scene,
                          const render::RenderOutput& output) {
   auto file = [&](const std::string& name) { return out.file(prefix + name); };
-  std::vector<Vec3d> positions, axes;
-  std::string anisotropy;
-  bool leds = false;
-  for (const reflectance::Light& light : scene.lighting.lights) {
-    positions.push_back(ToCamera(scene.camera, light.position_cam));
-    axes.push_back(scene.camera.rotation * light.axis_cam);
-    anisotropy += std::to_string(light.anisotropy) + "\n";
-    leds = leds || light.anisotropy > 0;
-  }
-  WriteTextFile(file("light_positions.txt"), FormatTriples(positions));
-  if (leds) {
-    WriteTextFile(file("light_axes.txt"), FormatTriples(axes));
+  const RenderedNearLights near = NearLightsOf(scene, output);
+  WriteTextFile(file("light_positions.txt"), FormatTriples(near.positions_mm));
+  if (near.leds) {
+    std::string anisotropy;
+    for (double mu : near.anisotropy) anisotropy += std::to_string(mu) + "\n";
+    WriteTextFile(file("light_axes.txt"), FormatTriples(near.axes));
     WriteTextFile(file("light_anisotropy.txt"), anisotropy);
   }
-  CameraIntrinsics camera;
-  camera.perspective = scene.camera.type == geometry::CameraType::kPerspective;
-  camera.fx = scene.camera.fx;
-  camera.fy = scene.camera.fy;
-  camera.cx = scene.camera.cx;
-  camera.cy = scene.camera.cy;
-  camera.pixel_size = camera.perspective ? 0.0 : scene.camera.pixel_size();
-  WriteTextFile(file("camera.json"), FormatCameraJson(camera));
+  WriteTextFile(file("camera.json"), FormatCameraJson(near.camera));
   WriteMatImage(file("Depth_gt.mat"), "Depth_gt", output.depth);
 }
 
@@ -191,13 +202,11 @@ void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const rende
     DatasetToWrite d;
     // Near lights: the directions toward them from the visible surface's mean point, so a
     // distant-light reader gets the lights as the object's centre sees them.
-    const Vec3d centre = near ? VisibleCentre(scene.camera, output) : Vec3d::Zero();
+    const RenderedNearLights rig = near ? NearLightsOf(scene, output) : RenderedNearLights{};
     for (std::size_t j = 0; j < output.per_light.size(); ++j) {
       const reflectance::Light& light = scene.lighting.lights[j];
       d.images.push_back(&output.per_light[j]);
-      d.light_directions.push_back(
-          near ? Vec3d((ToCamera(scene.camera, light.position_cam) - centre).normalized())
-               : light.direction_cam);
+      d.light_directions.push_back(near ? rig.directions[j] : light.direction_cam);
       d.light_intensities.push_back(light.diffuse_intensity);
     }
     d.mask = &output.mask;

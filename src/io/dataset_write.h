@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "io/dataset_text.h"
 #include "io/output_folder.h"
 #include "io/scene_file.h"
 #include "render/renderer.h"
@@ -15,6 +16,17 @@ namespace iphong::io {
 // "" when every light can go into a per-light dataset (the DiLiGenT layout has directions only),
 // else which light cannot.
 std::string CheckDatasetLights(const render::Scene& scene);
+
+// A render's point lights as the near-light layout states them (io/near_capture.h): positions
+// and LED axes in the main camera's frame (scene units as mm), each LED's anisotropy, the camera's
+// intrinsics, and the directions toward the lights from the visible surface's mean point.
+struct RenderedNearLights {
+  std::vector<Vec3d> positions_mm, axes, directions;
+  std::vector<double> anisotropy;
+  CameraIntrinsics camera;
+  bool leds = false;  // some anisotropy > 0: light_axes.txt and light_anisotropy.txt are written
+};
+RenderedNearLights NearLightsOf(const render::Scene& scene, const render::RenderOutput& output);
 
 // A photometric-stereo dataset to write in the DiLiGenT layout.
 struct DatasetToWrite {

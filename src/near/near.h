@@ -29,6 +29,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,11 @@ struct NearOptions {
   // The object's distance along the optical axis, a first guess (0: GuessDistance, else the
   // distance the images fit best among a wide range).
   double distance = 0;
+  // With a guess (given, or from the lights' layout) the surface's mean distance stays within
+  // this factor of it: the images refine the distance, they do not replace it. A ring of lights
+  // in the camera's plane is ambiguous there (lights on a cone round the axis fit a flatter
+  // surface nearer as well: under noise σ 0.002 a sphere at 466 mm walked to 190 mm, 17° off).
+  double distance_range = 1.25;
   int max_passes = 8;
   int woodham_passes = 2;       // before the full solve; 0: straight to it
   double tolerance_deg = 0.05;  // mean change of the normals between passes that ends the loop
@@ -83,6 +89,9 @@ struct NearResult {
   // Nothing in the options or the lights' layout gave the distance: the images chose it among
   // a wide range (a warning for the user: --distance settles it).
   bool distance_from_images = false;
+  // Then, other distances whose surfaces fit the images within 25 % as well: the images leave
+  // the distance ambiguous (a ring of lights round the lens under noise), --distance decides.
+  std::vector<double> other_distances;
   double seconds = 0;
 };
 
@@ -107,11 +116,14 @@ double SurfaceCost(const solve::PhotometricData& data, const geometry::HeightMap
 // The surface's free number — the depth's scale (perspective) or its distance along the axis
 // (orthographic) — as the images choose it: the factor on the surface's mean distance (the
 // depth scaled, or shifted by the mean times factor − 1) whose SurfaceCost is lowest, over a
-// grid from 1/range to range in steps of at most √2, then golden section to 0.05 %.
+// grid from 1/range to range (and the mean distance within [min_distance, max_distance]) in
+// steps of at most √2, then golden section to 0.05 %.
 double ChooseSurfaceOffset(const solve::PhotometricData& data,
                            const geometry::HeightMapFrame& frame, const std::vector<double>& depth,
                            const std::vector<Vec3d>& normals,
                            const std::vector<std::size_t>& sample,
-                           const solve::PixelFitSettings& fit, double range, int threads);
+                           const solve::PixelFitSettings& fit, double range, int threads,
+                           double min_distance = 0,
+                           double max_distance = std::numeric_limits<double>::infinity());
 
 }  // namespace iphong::near

@@ -105,7 +105,7 @@ std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
         if (!fitter.Prepare(s.pixel)) continue;  // the sample was drawn where it succeeds
         record(i, HeldOutFromStart(refiner, (*settings.starts)[s.pixel], data.images,
                                    fitter.luminance(), fitter.usable(), fold.data(),
-                                   fitter.threshold(), buffer));
+                                   fitter.threshold(), buffer, nullptr, fit.censor_bright));
       }
     });
   } else {
@@ -227,6 +227,15 @@ std::vector<std::size_t> SpreadIndices(std::size_t n, int count) {
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
+}
+
+std::vector<int> LightFolds(int lights) {
+  const int folds = FoldCount(lights);
+  std::vector<int> fold(std::max(lights, 0));
+  for (int j = 0; j < lights; ++j) fold[j] = j % folds;
+  std::mt19937 rng(20261123);
+  std::shuffle(fold.begin(), fold.end(), rng);
+  return fold;
 }
 
 int FoldCount(int lights) {
@@ -370,11 +379,7 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   // Folds of the lights, fixed for every model: each fit sees at least kMinTrainingLights
   // lights (six per unknown of normal, kd and ks), or all but one — two halves for DiLiGenT's
   // 96, leave-one-out for 24 or fewer. A shuffled alternation, so each fold spans the set.
-  const int folds = FoldCount(k);
-  std::vector<int> fold(k);
-  for (int j = 0; j < k; ++j) fold[j] = j % folds;
-  std::mt19937 rng(20261123);
-  std::shuffle(fold.begin(), fold.end(), rng);
+  const std::vector<int> fold = LightFolds(k);
   choice.fold = fold;
   // What the observations are taken to be: as recorded, less the estimated ambient term, and,
   // for integer codes, half a code brighter (truncated rather than rounded). Each variant has

@@ -52,6 +52,9 @@ constexpr int kMinTrainingLights = 24;
 // The number of folds for K lights: the fewest that leave kMinTrainingLights in each fit, at
 // least 2; K (leave-one-out) for K ≤ kMinTrainingLights.
 int FoldCount(int lights);
+// Each light's fold: a shuffled alternation over FoldCount(lights) folds, fixed (one seed), so
+// each fold spans the set — what every held-out comparison of a capture uses.
+std::vector<int> LightFolds(int lights);
 
 // The mean of a_i − b_i over the n entries (those where use[i] ≠ 0, with `use`) and its standard
 // error, the entries taken as independent; {0, 0} for none.

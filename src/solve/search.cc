@@ -285,7 +285,7 @@ HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, c
 
 HeldOutResult HeldOutFromStart(HeldOutRefiner& refiner, const Vec3d& start, int lights,
                                const double* y, const double* usable, const int* fold, double t,
-                               std::vector<double>& buffer, double* per_light) {
+                               std::vector<double>& buffer, double* per_light, bool censor_bright) {
   const int k = lights;
   if (per_light) std::fill(per_light, per_light + k, 0.0);
   const int folds = 1 + *std::max_element(fold, fold + k);
@@ -297,7 +297,8 @@ HeldOutResult HeldOutFromStart(HeldOutRefiner& refiner, const Vec3d& start, int 
     if (f < 2) out.normal[f] = normal;
     for (int j = 0; j < k; ++j) {
       if (fold[j] != f || usable[j] == 0) continue;
-      const double cost = internal::CensoredCost(y[j] - refiner.Predicted(j), t) / (t * t);
+      const double r = y[j] - refiner.Predicted(j);
+      const double cost = internal::CensoredCost(censor_bright ? -std::abs(r) : r, t) / (t * t);
       out.cost += cost;
       if (per_light) per_light[j] = cost;
     }

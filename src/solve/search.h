@@ -157,8 +157,11 @@ HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, c
 // The same held-out cost without a search: each fold's normal is `refiner`'s refinement of one
 // start (the pixel's normal from an earlier solve) on the fold's training lights. What a second
 // pass costs when the first one has placed every pixel in its basin.
+// With `censor_bright` a held-out observation brighter than predicted by more than t is censored
+// too (the fit's PixelFitSettings::censor_bright).
 HeldOutResult HeldOutFromStart(HeldOutRefiner& refiner, const Vec3d& start, int lights,
                                const double* y, const double* usable, const int* fold, double t,
-                               std::vector<double>& buffer, double* per_light = nullptr);
+                               std::vector<double>& buffer, double* per_light = nullptr,
+                               bool censor_bright = false);
 
 }  // namespace iphong::solve
