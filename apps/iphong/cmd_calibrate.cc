@@ -1,5 +1,7 @@
 // `iphong calibrate-lights IMAGES -o DIR`: light directions (and intensities, and point-light
 // positions) from photos of a mirror sphere, a matte sphere or an object with known normals.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
@@ -26,6 +28,7 @@ struct CalibrateOptions {
   std::vector<double> circles;     // cx, cy, r [, cx, cy, r]
   std::vector<double> intrinsics;  // fx, fy, cx, cy
   int max_spheres = 2;
+  double sphere_radius_mm = 0;  // > 0: light positions in mm
   double saturation = 1.0;
   bool uniform_albedo = false;
   CaptureFlags capture;
@@ -41,6 +44,87 @@ ImageF Brightest(const std::vector<ImageF>& images) {
     for (std::size_t i = 0; i < out.pixels.size(); ++i)
       out.pixels[i] = std::max(out.pixels[i], image.pixels[i]);
   return out;
+}
+
+// The near-light layout of triangulated positions (io/near_capture.h), and how near the lights
+// are: in the spheres' diameters from their midpoint, and what that does across an object of the
+// spheres' size — its directions turn by up to 2·asin(r/d), its irradiance changes by
+// (1 ± r/d)⁻² — against what distant lights assume.
+struct NearLayout {
+  std::vector<Vec3d> positions;
+  io::CameraIntrinsics camera;
+  nlohmann::json report;
+  std::string summary;
+};
+
+NearLayout NearLayoutOf(const std::vector<Vec3d>& positions_cal, const nlohmann::json& report,
+                        const calibrate::Intrinsics& intrinsics, double sphere_radius_mm, int width,
+                        int height) {
+  NearLayout n;
+  const nlohmann::json& spheres = report["spheres"];
+  Vec3d centre = Vec3d::Zero();
+  double radius = 0, radius_px = 0;
+  for (const nlohmann::json& s : spheres) {
+    centre += Vec3d(s["center_cam"][0], s["center_cam"][1], s["center_cam"][2]);
+    radius += s["radius"].get<double>();
+    radius_px += s["radius_px"].get<double>();
+  }
+  centre /= static_cast<double>(spheres.size());
+  radius /= static_cast<double>(spheres.size());
+  radius_px /= static_cast<double>(spheres.size());
+  // Calibration units: pixels (orthographic) or sphere radii (perspective); mm with the radius.
+  const double mm = sphere_radius_mm > 0 ? sphere_radius_mm / radius : 1.0;
+  std::vector<double> sizes, turn, change;
+  for (const Vec3d& s : positions_cal) {
+    const double d = (s - centre).norm();
+    sizes.push_back(d / (2 * radius));
+    turn.push_back(2 * std::asin(std::min(1.0, radius / d)) * 180 / M_PI);
+    change.push_back(100 * (1 / std::pow(1 - std::min(0.99, radius / d), 2) - 1));
+  }
+  n.camera.perspective = intrinsics.perspective();
+  if (n.camera.perspective) {
+    n.camera.fx = intrinsics.fx, n.camera.fy = intrinsics.fy;
+    n.camera.cx = intrinsics.cx, n.camera.cy = intrinsics.cy;
+    for (const Vec3d& s : positions_cal) n.positions.push_back(s * mm);
+  } else {
+    // The orthographic frame of the layout is centred on the image, its origin in front of
+    // every light (the object, the spheres' plane, at the depth of the nearest light's z plus a
+    // radius).
+    double front = 0;
+    for (const Vec3d& s : positions_cal) front = std::max(front, s.z());
+    front += radius;
+    n.camera.pixel_size = mm;
+    for (const Vec3d& s : positions_cal) {
+      n.positions.push_back(Vec3d(s.x() - width / 2.0, s.y() + height / 2.0, s.z() - front) * mm);
+    }
+  }
+  const auto [lo, hi] = std::minmax_element(sizes.begin(), sizes.end());
+  const double worst_turn = *std::max_element(turn.begin(), turn.end());
+  const double worst_change = *std::max_element(change.begin(), change.end());
+  std::vector<double> sorted = sizes;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  // A degree is what the best captures' normals are good to: lights whose directions turn less
+  // than that across the object can be taken as distant.
+  const bool distant = worst_turn < 1;
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "Lights %.3g to %.3g sphere diameters from the spheres (median %.3g): across an "
+                "object of the spheres' size their directions turn by up to %.2g deg and their "
+                "irradiance changes by up to %.2g%%: %s",
+                *lo, *hi, sorted[sorted.size() / 2], worst_turn, worst_change,
+                distant ? "distant lights would do (light_directions.txt)"
+                        : "use the near-light layout (light_positions.txt, camera.json)");
+  n.summary = text;
+  n.report = {{"units", sphere_radius_mm > 0   ? "mm"
+                        : n.camera.perspective ? "sphere radii (give --sphere-radius for mm)"
+                                               : "pixels (give --sphere-radius for mm)"},
+              {"distance_in_sphere_diameters",
+               {{"min", *lo}, {"max", *hi}, {"median", sorted[sorted.size() / 2]}}},
+              {"largest_direction_turn_deg", worst_turn},
+              {"largest_irradiance_change_percent", worst_change},
+              {"distant_would_do", distant},
+              {"sphere_radius_px", radius_px}};
+  return n;
 }
 
 void RunCalibrate(const CalibrateOptions& o) {
@@ -255,8 +339,15 @@ void RunCalibrate(const CalibrateOptions& o) {
 
   io::WriteTextFile(out.file("light_directions.txt"), io::FormatTriples(directions));
   io::WriteTextFile(out.file("light_intensities.txt"), io::FormatTriples(intensities));
-  if (!positions.empty())
-    io::WriteTextFile(out.file("light_positions.txt"), io::FormatTriples(positions));
+  std::string nearness;
+  if (!positions.empty()) {
+    const NearLayout layout = NearLayoutOf(positions, report, camera, o.sphere_radius_mm,
+                                           dataset.width(), dataset.height());
+    io::WriteTextFile(out.file("light_positions.txt"), io::FormatTriples(layout.positions));
+    io::WriteTextFile(out.file("camera.json"), io::FormatCameraJson(layout.camera));
+    report["near_lights"] = layout.report;
+    nearness = layout.summary;
+  }
   io::WriteTextFile(out.file("lights.lp"), io::FormatLp(dataset.filenames, directions));
   io::WriteImage(out.file("calibration.png"), io::CalibrationPicture(picture));
   report["total_seconds"] = SecondsSince(start);
@@ -265,10 +356,12 @@ void RunCalibrate(const CalibrateOptions& o) {
   PrintJson(o.common, report.dump(2));
   Say(o.common, "Calibrated %zu lights (%s; intensities %s) in %.2f s\n", k,
       report["method"].get<std::string>().c_str(), intensity_source.c_str(), SecondsSince(start));
+  if (!nearness.empty()) Say(o.common, "%s\n", nearness.c_str());
   Say(o.common,
       "Wrote %s: light_directions.txt, light_intensities.txt, lights.lp%s, calibration.json, "
       "calibration.png\n",
-      o.output_dir.c_str(), positions.empty() ? "" : ", light_positions.txt");
+      o.output_dir.c_str(),
+      positions.empty() ? "" : ", light_positions.txt and camera.json (the near-light layout)");
 }
 
 }  // namespace
@@ -304,6 +397,10 @@ void AddCalibrateCommand(CLI::App& app) {
                   "Perspective camera fx,fy,cx,cy in pixels (default: orthographic)")
       ->delimiter(',')
       ->expected(4);
+  cmd->add_option("--sphere-radius", o->sphere_radius_mm,
+                  "The spheres' radius in mm: light_positions.txt in mm (else in sphere radii, "
+                  "or pixels for an orthographic camera)")
+      ->check(Positive());
   cmd->add_option("--spheres", o->max_spheres, "Most spheres to look for in the mask")
       ->check(CLI::Range(1, 2))
       ->capture_default_str();

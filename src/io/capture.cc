@@ -269,11 +269,30 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
   std::vector<std::string>* warnings = &c.warnings;
   if (!options.lights_needed) {
     c.lights_format = "none (not needed)";
-  } else if (c.layout == "DiLiGenT" && light_file.empty()) {
-    c.near = FindNearLights(directory, c.names.size(), warnings);
+  } else if ((c.layout == "DiLiGenT" && light_file.empty()) ||
+             light_file.filename() == "light_positions.txt") {
+    // Positions alone: the dataset's own, or a rig's named with --lights (calibrate-lights
+    // writes them with camera.json beside them), in the order of the images.
+    if (c.names.empty()) {
+      for (const std::string& name : files)
+        if (HasImageExtension(name) && !IsCompanionImage(name)) c.names.push_back(name);
+      c.order = "natural order";
+    }
+    const std::string rig =
+        light_file.empty() ? directory : Absolute(light_file).parent_path().string();
+    c.near = FindNearLights(rig, c.names.size(), warnings);
+    if (!c.near.present()) Fail(light_file, "no such file");
     c.light_directions = DirectionsFromPositions(c.near);
     c.lights_path = c.near.positions_path;
     c.lights_format = "positions (near lights)";
+    // The rig's intensities when the dataset has none of its own.
+    if (options.intensities.empty() && !Exists(dir / "light_intensities.txt") &&
+        Exists(fs::path(rig) / "light_intensities.txt")) {
+      const fs::path rig_intensities = fs::path(rig) / "light_intensities.txt";
+      c.light_intensities = ParseLightIntensities(ReadTextFile(rig_intensities.string()),
+                                                  rig_intensities.string(), c.names.size());
+      c.intensities_source = rig_intensities.string();
+    }
   } else if (c.layout == "DiLiGenT" && options.lights.empty()) {
     c.light_directions =
         ParseLightDirections(ReadTextFile(c.lights_path), c.lights_path, c.names.size(), warnings);

@@ -83,6 +83,15 @@ RenderedNearLights NearLightsOf(const render::Scene& scene, const render::Render
   near.camera.cx = scene.camera.cx;
   near.camera.cy = scene.camera.cy;
   near.camera.pixel_size = near.camera.perspective ? 0.0 : scene.camera.pixel_size();
+  if (!near.camera.perspective) {
+    double front = 0;
+    for (const Vec3d& p : near.positions_mm) front = std::max(front, p.z());
+    for (std::size_t p = 0; p < output.mask.inside.size(); ++p) {
+      if (output.mask.inside[p]) front = std::max(front, -double(output.depth.pixels[p]));
+    }
+    near.depth_shift = front;
+    for (Vec3d& p : near.positions_mm) p.z() -= front;
+  }
   return near;
 }
 
@@ -101,7 +110,11 @@ void WriteNearLightFiles(OutputFolder& out, const std::string& prefix, const ren
     WriteTextFile(file("light_anisotropy.txt"), anisotropy);
   }
   WriteTextFile(file("camera.json"), FormatCameraJson(near.camera));
-  WriteMatImage(file("Depth_gt.mat"), "Depth_gt", output.depth);
+  ImageF depth = output.depth;
+  for (std::size_t p = 0; p < depth.pixels.size(); ++p) {
+    if (output.mask.inside[p]) depth.pixels[p] += static_cast<float>(near.depth_shift);
+  }
+  WriteMatImage(file("Depth_gt.mat"), "Depth_gt", depth);
 }
 
 }  // namespace

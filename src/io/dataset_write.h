@@ -25,6 +25,9 @@ struct RenderedNearLights {
   std::vector<double> anisotropy;
   CameraIntrinsics camera;
   bool leds = false;  // some anisotropy > 0: light_axes.txt and light_anisotropy.txt are written
+  // An orthographic camera's frame has its origin moved along the axis to in front of every
+  // light and every visible point (the layout's object is at z < 0): the depth to add.
+  double depth_shift = 0;
 };
 RenderedNearLights NearLightsOf(const render::Scene& scene, const render::RenderOutput& output);
 

@@ -6,7 +6,7 @@
 //
 // D is chosen by what predicts held-out lights best: the distant solve first (the plan, the
 // search, every pixel's fit), its normals integrated into a surface, then each candidate D — the
-// object's size times 2, 3, 4, 6, … 64, and D = ∞ (distant) — scored by held-out costs on the
+// object's size times 2, 3, 4, 6, … 32, and D = ∞ (distant) — scored by held-out costs on the
 // model choice's pixels and folds (solve::PixelHeldOutCosts), each fold's normal refined from
 // the distant one with that D's lights (warm: no search), by two tests: the plan's model (a sharp
 // lobe places highlights by each pixel's light directions) and a Lambertian fit with highlights

@@ -32,9 +32,7 @@ std::string NearOptions::Validate() const {
   if (auto m = normals.Validate(); !m.empty()) return m;
   if (!std::isfinite(distance) || distance < 0) return "distance must be finite and >= 0";
   if (max_passes < 1 || max_passes > 100) return "passes must be in 1..100";
-  if (woodham_passes < 0 || woodham_passes > max_passes) {
-    return "woodham passes must be in 0..passes";
-  }
+  if (woodham_passes < 0 || woodham_passes > 100) return "woodham passes must be in 0..100";
   if (!(tolerance_deg > 0) || !std::isfinite(tolerance_deg)) return "tolerance must be > 0";
   if (!(min_cos > 0 && min_cos < 1)) return "min_cos must be in (0, 1)";
   if (scale_sample < 10) return "scale sample must be >= 10";
@@ -171,7 +169,7 @@ class Loop {
     int refines = 0;
     solve::NormalResult last;
     solve::PixelFitSettings fit = lambert_fit_;
-    for (int pass = 0; pass < o_.max_passes; ++pass) {
+    for (int pass = 0; pass < woodham_passes + o_.max_passes; ++pass) {
       const auto pass_start = Clock::now();
       NearPass record;
       solve::NormalResult now;
@@ -269,7 +267,7 @@ class Loop {
       }
       // Woodham's passes go on while the surface still moves (each costs little), so the model
       // is chosen on the surface Woodham's normals settle on.
-      if (record.kind == "woodham" && pass + 1 == woodham_passes && pass + 2 < o_.max_passes &&
+      if (record.kind == "woodham" && pass + 1 == woodham_passes &&
           (pass == 0 || record.change_deg > kSettledDeg) && woodham_passes < kMaxWoodhamPasses) {
         ++woodham_passes;
       }
@@ -333,8 +331,13 @@ NearResult SolveNearLights(PhotometricData data, const geometry::HeightMapFrame&
   Loop loop(std::move(data), frame, o);
   NearResult result;
   if (guess > 0) {
-    result = loop.Run(std::vector<double>(pixels, guess), nullptr, false, guess / o.distance_range,
-                      guess * o.distance_range);
+    // A distance the user gives bounds the surface's to distance_range; the layout's (where the
+    // LEDs point, a dome's centre) is the object's centre, nearer than its visible surface by up
+    // to its radius, which near lights make a large fraction (a dome's centre 145 mm away, the
+    // surface's mean 110 mm): a factor of 2.
+    const double range = o.distance > 0 ? o.distance_range : 2.0;
+    result =
+        loop.Run(std::vector<double>(pixels, guess), nullptr, false, guess / range, guess * range);
   } else {
     // Nothing in the lights' layout says where the object is (a ring of lights in one plane):
     // the images say, from around the lights' own median distance from the camera.

@@ -55,13 +55,14 @@ struct NearOptions {
   // The object's distance along the optical axis, a first guess (0: GuessDistance, else the
   // distance the images fit best among a wide range).
   double distance = 0;
-  // With a guess (given, or from the lights' layout) the surface's mean distance stays within
-  // this factor of it: the images refine the distance, they do not replace it. A ring of lights
-  // in the camera's plane is ambiguous there (lights on a cone round the axis fit a flatter
-  // surface nearer as well: under noise σ 0.002 a sphere at 466 mm walked to 190 mm, 17° off).
+  // With a distance given the surface's mean distance stays within this factor of it: the
+  // images refine the distance, they do not replace it. A ring of lights in the camera's plane
+  // is ambiguous there (lights on a cone round the axis fit a flatter surface nearer as well:
+  // under noise σ 0.002 a sphere at 466 mm walked to 190 mm, 17° off). A distance from the
+  // lights' layout (the object's centre) bounds it to a factor of 2.
   double distance_range = 1.25;
-  int max_passes = 8;
-  int woodham_passes = 2;       // before the full solve; 0: straight to it
+  int max_passes = 8;           // the full solve and the refining passes after Woodham's
+  int woodham_passes = 2;       // before the full solve (more while they move); 0: straight to it
   double tolerance_deg = 0.05;  // mean change of the normals between passes that ends the loop
   double min_cos = 0.05;        // integration's grazing guard (integrate::IntegrateOptions)
   int scale_sample = 1000;      // pixels whose fits choose the surface's distance

@@ -256,7 +256,7 @@ SCENE_CASES = [
     ("shininess_1e400.json", 1, r"parse error: number overflow parsing '1e400'"),
     ("key_with_newline.json", 1, r"unknown field 'name x'"),
     ("nothing_visible.json", 1, r"nothing is visible"),
-    ("point_light_per_light.json", 1, r"light 1 is a point light"),
+    ("point_light_per_light.json", 1, r"light 1 is a point light without falloff"),
     ("corrupt_mesh.json", 1, r"not_a_mesh\.ply: declares 1000000000 vertex and 1000000000 face"),
     ("ks_is_a_string.json", 1, r"objects\[0\]\.material\.ks: expected 3 numbers"),
     ("encoding_not_a_string.json", 1, r"output\.encoding: expected a string"),

@@ -314,3 +314,64 @@ def test_estimate_intensities_refuses_a_metallic_object(tmp_path):
                           r"to estimate their lights' intensities \(median relative residual "
                           r"0\.079, over 0\.05\); give the intensities$")
     assert not (tmp_path / "out").exists()
+
+
+def mirror_images_near(position, width, centres, radius, half_width_deg=4.0, gain=0.8):
+    """Mirror balls under a point light at `position` (pixels: x right from the image's left, y
+    up from its middle row, z toward the camera, the balls' centres at z = 0): a Gaussian
+    highlight about the direction from each surface point toward the light."""
+    rows, mask = [], []
+    for r in range(SIZE):
+        row, inside = bytearray(), bytearray()
+        for c in range(width):
+            value, on = 0.0, 0
+            for cx in centres:
+                dx, dy = (c + 0.5 - cx) / radius, -(r + 0.5 - CY) / radius
+                if dx * dx + dy * dy < 1:
+                    nz = math.sqrt(1 - dx * dx - dy * dy)
+                    reflected = [2 * nz * dx, 2 * nz * dy, 2 * nz * nz - 1]
+                    point = [cx + dx * radius, dy * radius, nz * radius]
+                    light = unit([p - q for p, q in zip(position, point)])
+                    cos = max(-1.0, min(1.0, sum(a * b for a, b in zip(reflected, light))))
+                    value = 0.02 + gain * math.exp(
+                        -0.5 * (math.degrees(math.acos(cos)) / half_width_deg) ** 2)
+                    on = 255
+            row += bytes([min(255, round(255 * value))] * 3)
+            inside.append(on)
+        rows.append(bytes(row))
+        mask.append(bytes(inside))
+    return png(width, SIZE, rows, 3), png(width, SIZE, mask, 1)
+
+
+def test_two_spheres_under_near_lights_write_the_near_light_layout(tmp_path):
+    """Calibrate then solve, two commands: the positions come out in the near-light layout (mm
+    with --sphere-radius, camera.json), with how near the lights are stated as numbers."""
+    folder = tmp_path / "rig"
+    folder.mkdir()
+    # Lights 300-400 px from the balls (radius 30 px, 30 mm: 1 mm a pixel): 5-7 diameters.
+    positions = [(120 + 250, 60, 200), (120 - 200, -90, 250), (120 + 40, 160, 260),
+                 (120 - 120, 150, 300), (120 + 150, -170, 220)]
+    for j, p in enumerate(positions):
+        image, mask = mirror_images_near(p, width=240, centres=(40.0, 200.0), radius=30.0)
+        (folder / f"rig.{j + 1}.png").write_bytes(image)
+    (folder / "mask.png").write_bytes(mask)
+    out = tmp_path / "lights"
+    code, stdout, err = run("calibrate-lights", folder, "-o", out, "--sphere-radius", "30")
+    assert code == 0, err
+    assert "use the near-light layout" in stdout
+    report = json.loads((out / "calibration.json").read_text())
+    near = report["near_lights"]
+    assert near["units"] == "mm" and not near["distant_would_do"]
+    assert 3 < near["distance_in_sphere_diameters"]["min"] < near["distance_in_sphere_diameters"]["max"] < 8
+    # Orthographic: camera.json's pixel size (mm a pixel), positions centred on the image with
+    # their frame's origin in front of every light.
+    assert json.loads((out / "camera.json").read_text()) == {"pixel_size": pytest.approx(1.0, rel=0.02)}
+    written = [list(map(float, line.split()))
+               for line in (out / "light_positions.txt").read_text().splitlines()]
+    assert max(w[2] for w in written) < 0  # every light in front of the frame's origin
+    # x, y in the image-centred frame; z up to the frame's shift (the nearest light's z less a
+    # radius, itself triangulated).
+    shift = sum(w[2] - p[2] for w, p in zip(written, positions)) / len(positions)
+    for w, p in zip(written, positions):
+        truth = [p[0] - 120, p[1], p[2] + shift]
+        assert math.dist(w, truth) < 0.03 * math.dist(p, (120, 0, 0)), (w, truth)

@@ -212,3 +212,31 @@ def test_render_refuses_mixed_and_falloff_free_lights(tmp_path):
     (tmp_path / "flat.json").write_text(json.dumps(scene))
     assert_refused(tmp_path, ["render", "flat.json", "-o", "out", "--per-light"], 1,
                    r"without falloff", "flat.json", cwd=tmp_path)
+
+
+def test_a_rig_calibrated_once_serves_other_photos(tmp_path):
+    """calibrate-lights writes the rig's light_positions.txt and camera.json; photos taken with
+    it then need nothing but --lights naming them (the rig's intensities come along)."""
+    scene = json.loads(SCENE.read_text())
+    scene["lights"][0]["anisotropy"] = 0  # what a mirror sphere can measure: positions
+    (tmp_path / "scene.json").write_text(json.dumps(scene))
+    code, _, err = run("render", tmp_path / "scene.json", "-o", tmp_path / "rendered",
+                       "--per-light")
+    assert code == 0, err
+    rig, photos = tmp_path / "rig", tmp_path / "photos"
+    rig.mkdir()
+    photos.mkdir()
+    for name in ["light_positions.txt", "camera.json", "light_intensities.txt"]:
+        shutil.copy(tmp_path / "rendered" / name, rig / name)
+    for name in (tmp_path / "rendered").iterdir():
+        if name.suffix == ".png" and name.stem.isdigit() or name.name == "mask.png":
+            shutil.copy(name, photos / name.name)
+    shutil.copy(tmp_path / "rendered" / "Normal_gt.mat", photos / "Normal_gt.mat")
+    code, out, err = run("normals", photos, "-o", tmp_path / "res", "--lights",
+                         rig / "light_positions.txt", "--model", "lambert", "--json")
+    assert code == 0, err
+    metrics = json.loads(out)
+    assert metrics["input"]["lights_format"] == "positions (near lights)"
+    assert metrics["input"]["intensities"].endswith("rig/light_intensities.txt")
+    assert "near_lights" in metrics
+    assert metrics["near_lights"]["distance_mm"] == pytest.approx(464.3, abs=5)
