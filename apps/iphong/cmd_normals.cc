@@ -24,66 +24,6 @@
 
 namespace iphong::cli {
 
-nlohmann::json NormalsInputJson(const io::Dataset& d) {
-  nlohmann::json counts = nlohmann::json::array();
-  for (std::size_t j = 0; j < d.image_counts.size(); ++j) {
-    counts.push_back({{"file", d.filenames[j]},
-                      {"saturated_pixels", d.image_counts[j].saturated},
-                      {"black_pixels", d.image_counts[j].black}});
-  }
-  return {{"layout", d.files.layout},
-          {"order", d.files.order},
-          {"lights", d.files.lights_path},
-          {"lights_format", d.files.lights_format},
-          {"intensities", d.files.intensities_source},
-          {"mask", d.files.mask_path},
-          {"encoding", d.encoding.encoding == io::Encoding::kSrgb ? "srgb" : "linear"},
-          {"encoding_reason", d.encoding.reason},
-          {"file_size", {d.file_width, d.file_height}},
-          {"size", {d.mask.width, d.mask.height}},
-          {"ground_truth", d.files.ground_truth_path},
-          {"images", counts}};
-}
-
-nlohmann::json EstimatedMaterialJson(const solve::NormalResult& result) {
-  return {{"model", reflectance::LobeName(result.model)},
-          {"ks", {result.ks[0], result.ks[1], result.ks[2]}},
-          {"shininess", result.shininess},
-          {"ambient", {1, 1, 1}},
-          {"ka", {result.ambient_term[0], result.ambient_term[1], result.ambient_term[2]}},
-          {"comment", "estimated by iphong normals: " + result.specular_note}};
-}
-
-std::string MaterialLabel(const solve::NormalOptions& options, const solve::NormalResult& result) {
-  return options.material_known                         ? "known (material.json)"
-         : options.model == reflectance::Lobe::kLambert ? "lambertian"
-         : result.material_estimated                    ? "estimated"
-                                                        : "lambertian (chosen)";
-}
-
-solve::NormalOptions NormalOptionsFor(const NormalsCommandOptions& o, const io::Dataset& d) {
-  solve::NormalOptions options;
-  options.discard_dark = o.discard_dark;
-  options.discard_bright = o.discard_bright;
-  options.threads = o.common.threads;
-  options.shadow_threshold = o.shadow_threshold;
-  options.irls_rounds = o.irls_rounds;
-  options.color_residuals = !o.fast;
-  if (d.material && !o.ignore_material) {
-    options.model = d.material->model;
-    options.material_known = true;
-    options.ambient_term = d.material->ambient.cwiseProduct(d.material->material.ka);
-    options.ks = d.material->material.ks;
-    options.shininess = d.material->material.shininess;
-    if (d.material->kd_known) options.known_albedo = d.material->material.kd;
-  }
-  if (o.model) {
-    options.model = reflectance::ParseLobe(*o.model);
-    options.choose_model = false;  // the user's lobe: only its shininess is chosen
-  }
-  return options;
-}
-
 namespace {
 
 nlohmann::json MetricsJson(const solve::AngularErrorMetrics& m) {

@@ -11,10 +11,14 @@
 #include <stdexcept>
 
 #include "core/parallel.h"
-#include "solve/light_tiles.h"
-#include "solve/search.h"
+#include "solve/heldout_internal.h"
 
 namespace iphong::solve {
+
+using internal::HeldOutCost;
+using internal::Sample;
+using internal::SamplePixels;
+using internal::SharedSpecular;
 
 double LobeHalfWidthDeg(reflectance::Lobe lobe, double shininess) {
   // (R·V)^n = 1/2 at cos ψ = 2^(−1/n), ψ the angle between L and V's mirror direction. N·H
@@ -39,164 +43,6 @@ std::vector<ModelCandidate> ModelFamily(std::optional<reflectance::Lobe> only) {
     for (int i = 0; i < 6; ++i) family.push_back({lobe, MinimumShininess(lobe) * std::pow(2.0, i)});
   }
   return family;
-}
-
-namespace {
-
-// Censoring rounds of each fold's local fit: the start's censoring and one revision of it.
-constexpr int kHeldOutFitRounds = 2;
-
-// The model choice's held-out fits: each fold's search winner refined by the local fit on the
-// fold's training lights (luminance), which then predicts the fold.
-class LocalFitRefiner : public HeldOutRefiner {
- public:
-  explicit LocalFitRefiner(PixelFitter& fitter) : fitter_(fitter) {}
-  Vec3d Refine(const Vec3d& start, const double* training) override {
-    internal::PixelSolution solution;
-    solution.normal = start;
-    fitter_.Fit(solution, training);
-    return solution.normal;
-  }
-  double Predicted(int j) const override { return fitter_.Predicted(j); }
-
- private:
-  PixelFitter& fitter_;
-};
-
-struct Sample {
-  std::size_t pixel = 0;
-  std::vector<double> y, usable;  // K each
-  double threshold = 0;
-};
-
-// The mean held-out cost of one model over the sample, its standard error and the mean angle
-// between the two halves' normals. Each fold's normal is the global search's on its training
-// lights, refined by the local fit (pixel_fit.h) on the same lights: a candidate on the grid is
-// up to half its spacing (~2°) from the training optimum, and a sharp lobe predicted from a normal
-// that far off loses to a broad one for that reason alone (a noise-free render of Phong n 30 chose
-// n 38.6 from grid normals, 29.6 with 16 times as many candidates).
-// Returns the per-pixel costs, for paired comparisons.
-std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
-                                const std::vector<Sample>& sample, const std::vector<int>& fold,
-                                const ModelChoiceSettings& settings) {
-  reflectance::ModelOptions model;
-  model.lobe = m.lobe;
-  PixelFitSettings fit = settings.fit;
-  fit.model = model;
-  fit.shininess = m.shininess;
-  fit.known_ks.reset();
-  if (m.ks_prior_weight > 0) fit.ks_prior = m.ks_prior, fit.ks_prior_weight = m.ks_prior_weight;
-  fit.color_residuals = false;  // the search's luminance
-  fit.rounds = kHeldOutFitRounds;
-  std::vector<double> cost(sample.size(), 0.0), angle(sample.size(), 0.0);
-  const auto record = [&](std::size_t i, const HeldOutResult& r) {
-    cost[i] = r.cost;
-    if (!r.normal[0].isZero() && !r.normal[1].isZero()) {
-      angle[i] = std::acos(std::clamp(r.normal[0].dot(r.normal[1]), -1.0, 1.0)) * 180 / M_PI;
-    }
-  };
-  if (settings.starts) {
-    ParallelFor(0, sample.size(), 16, settings.threads, [&](std::size_t b, std::size_t e) {
-      PixelFitter fitter(data, fit);
-      LocalFitRefiner refiner(fitter);
-      std::vector<double> buffer;
-      for (std::size_t i = b; i < e; ++i) {
-        const Sample& s = sample[i];
-        if (!fitter.Prepare(s.pixel)) continue;  // the sample was drawn where it succeeds
-        record(i, HeldOutFromStart(refiner, (*settings.starts)[s.pixel], data.images,
-                                   fitter.luminance(), fitter.usable(), fold.data(),
-                                   fitter.threshold(), buffer, nullptr, fit.censor_bright));
-      }
-    });
-  } else {
-    // Under near lights each tile of the sample has its own table; the local fit then refines
-    // the start with the pixel's own lights, so a tile may be as wide as the lobe's half width.
-    std::vector<std::size_t> pixels(sample.size());
-    std::vector<std::size_t> index(data.pixel_count(), 0);
-    for (std::size_t i = 0; i < sample.size(); ++i) {
-      pixels[i] = sample[i].pixel;
-      index[sample[i].pixel] = i;
-    }
-    const std::vector<LightTile> tiles =
-        MakeLightTiles(data, std::min(8.0, 2 * TileToleranceDeg(m.lobe, m.shininess)), &pixels);
-    ForEachTileChunk(
-        tiles, 16, settings.threads,
-        [&](std::size_t t) {
-          return CandidateTable(tiles[t].light_directions, model, m.shininess,
-                                settings.search_candidates, fold);
-        },
-        [&](std::size_t t, const CandidateTable& table, std::size_t b, std::size_t e) {
-          NormalSearch search(
-              table, 16,
-              m.ks_prior_weight > 0 ? std::optional(internal::Luminance(m.ks_prior)) : std::nullopt,
-              m.ks_prior_weight);
-          PixelFitter fitter(data, fit);
-          LocalFitRefiner refiner(fitter);
-          std::vector<double> buffer;
-          for (std::size_t n = b; n < e; ++n) {
-            const std::size_t i = index[tiles[t].pixels[n]];
-            const Sample& s = sample[i];
-            if (!fitter.Prepare(s.pixel)) continue;  // the sample was drawn where it succeeds
-            record(i, HeldOutSearch(search, table, fitter.luminance(), fitter.usable(), fold.data(),
-                                    fitter.threshold(), buffer, false, &refiner));
-          }
-        });
-  }
-  const double n = static_cast<double>(std::max<std::size_t>(1, sample.size()));
-  double sum = 0, sq = 0;
-  for (double c : cost) sum += c, sq += c * c;
-  m.heldout_cost = sum / n;
-  m.heldout_error = std::sqrt(std::max(0.0, sq / n - m.heldout_cost * m.heldout_cost) / n);
-  m.fold_angle_deg = std::accumulate(angle.begin(), angle.end(), 0.0) / n;
-  return cost;
-}
-
-// Pixels spread over the object (SpreadIndices) with at least 3 usable observations (in each half,
-// with `fold`).
-std::vector<Sample> SamplePixels(const PhotometricData& data, const ModelChoiceSettings& settings,
-                                 const std::vector<int>* fold) {
-  const int k = data.images;
-  std::vector<Sample> sample;
-  const std::size_t pixels = data.pixel_count();
-  PixelFitter fitter(data, settings.fit);
-  for (const std::size_t p : SpreadIndices(pixels, settings.sample)) {
-    if (!fitter.Prepare(p)) continue;
-    Sample s;
-    s.pixel = p;
-    s.y.assign(fitter.luminance(), fitter.luminance() + k);
-    s.usable.assign(fitter.usable(), fitter.usable() + k);
-    s.threshold = fitter.threshold();
-    // Every fit (all lights outside one fold) needs 3 usable observations.
-    const int folds = fold ? 1 + *std::max_element(fold->begin(), fold->end()) : 2;
-    bool enough = true;
-    for (int f = 0; f < folds; ++f) {
-      int training = 0;
-      for (int j = 0; j < k; ++j) training += s.usable[j] != 0 && (fold ? (*fold)[j] : j % 2) != f;
-      enough = enough && training >= 3;
-    }
-    if (enough) sample.push_back(std::move(s));
-  }
-  return sample;
-}
-
-}  // namespace
-
-std::vector<double> PixelHeldOutCosts(const PhotometricData& data, ModelCandidate& m,
-                                      const std::vector<std::size_t>& pixels,
-                                      const std::vector<int>& fold,
-                                      const ModelChoiceSettings& settings) {
-  std::vector<Sample> sample(pixels.size());
-  for (std::size_t i = 0; i < pixels.size(); ++i) {
-    if (pixels[i] >= data.pixel_count()) throw std::invalid_argument("pixel beyond the data");
-    sample[i].pixel = pixels[i];
-  }
-  if (fold.size() != static_cast<std::size_t>(data.images)) {
-    throw std::invalid_argument("one fold per light needed");
-  }
-  ModelChoiceSettings s = settings;
-  s.fit.ambient_term = m.ambient_term;
-  s.fit.code_offset = m.code_offset;
-  return HeldOutCost(data, m, sample, fold, s);
 }
 
 std::pair<double, double> PairedDifference(const double* a, const double* b, std::size_t n,
@@ -260,105 +106,6 @@ Vec3d EstimateAmbient(const PhotometricData& data) {
     const std::size_t q = pixels / 4;
     std::nth_element(darkest.begin(), darkest.begin() + q, darkest.end());
     out[c] = std::max(0.0, darkest[q]);
-  }
-  return out;
-}
-
-Vec3d SharedSpecular(const PhotometricData& data, const ModelCandidate& model,
-                     const ModelChoiceSettings& settings) {
-  const std::vector<Sample> sample = SamplePixels(data, settings, nullptr);
-  if (sample.empty() || model.lobe == reflectance::Lobe::kLambert) return Vec3d::Zero();
-  reflectance::ModelOptions options;
-  options.lobe = model.lobe;
-  const int k = data.images;
-  std::vector<std::array<double, 3>> ks(sample.size(), {0, 0, 0});
-  std::vector<int> ok(sample.size(), 0);
-  std::vector<std::size_t> pixels(sample.size());
-  std::vector<std::size_t> index(data.pixel_count(), 0);
-  for (std::size_t i = 0; i < sample.size(); ++i) {
-    pixels[i] = sample[i].pixel;
-    index[sample[i].pixel] = i;
-  }
-  // Pixel i's RGB ks at `normal` with the censoring of its luminance fit (kd, ks): the model's
-  // factors from the table (distant lights) or from the pixel's own lights (near ones).
-  const auto measure = [&](std::size_t i, const Vec3d& normal, const float* table_d,
-                           const float* table_s, double kd, double ks_lum, PixelLights& lights,
-                           std::vector<reflectance::LightFactors<double>>& f,
-                           std::vector<double>& w) {
-    const Sample& s = sample[i];
-    lights.At(s.pixel);
-    for (int j = 0; j < k; ++j) {
-      f[j] = table_d ? reflectance::LightFactors<double>{table_d[j], table_s[j]}
-                     : reflectance::ShadingFactors<double>(
-                           normal, lights.view(), lights.direction(j), model.shininess, options);
-    }
-    if (!table_d) {
-      const auto lum = internal::EliminatedCoefficients<double>(
-          f, 1, nullptr, [&](std::size_t j, int) { return s.y[j]; },
-          [&](std::size_t j) { return s.usable[j]; });
-      kd = lum[0].kd, ks_lum = lum[0].ks;
-    }
-    for (int j = 0; j < k; ++j) {
-      const double r = s.y[j] - kd * f[j].diffuse - ks_lum * f[j].specular;
-      w[j] = s.usable[j] * internal::CensoredWeight(r, s.threshold);
-    }
-    const float* obs = data.pixel(s.pixel);
-    const auto c = internal::EliminatedCoefficients<double>(
-        f, 3, nullptr,
-        [&](std::size_t j, int ch) {
-          return lights.lit(j)
-                     ? (obs[3 * j + ch] - settings.fit.ambient_term[ch]) / lights.irradiance(j)[ch]
-                     : 0.0;
-        },
-        [&](std::size_t j) { return w[j]; });
-    ks[i] = {c[0].ks, c[1].ks, c[2].ks};
-    ok[i] = 1;
-  };
-  if (settings.starts) {
-    ParallelFor(0, sample.size(), 16, settings.threads, [&](std::size_t b, std::size_t e) {
-      PixelLights lights(data);
-      std::vector<reflectance::LightFactors<double>> f(k);
-      std::vector<double> w(k);
-      for (std::size_t i = b; i < e; ++i) {
-        measure(i, (*settings.starts)[sample[i].pixel], nullptr, nullptr, 0, 0, lights, f, w);
-      }
-    });
-  } else {
-    const std::vector<LightTile> tiles = MakeLightTiles(
-        data, std::min(8.0, 2 * TileToleranceDeg(model.lobe, model.shininess)), &pixels);
-    ForEachTileChunk(
-        tiles, 16, settings.threads,
-        [&](std::size_t t) {
-          return CandidateTable(tiles[t].light_directions, options, model.shininess,
-                                settings.search_candidates);
-        },
-        [&](std::size_t t, const CandidateTable& table, std::size_t b, std::size_t e) {
-          NormalSearch search(table);
-          PixelLights lights(data);
-          std::vector<reflectance::LightFactors<double>> f(k);
-          std::vector<double> w(k);
-          for (std::size_t n = b; n < e; ++n) {
-            const std::size_t i = index[tiles[t].pixels[n]];
-            const Sample& s = sample[i];
-            const SearchResult fit =
-                search.Search(s.y.data(), s.usable.data(), s.threshold, nullptr);
-            if (fit.candidate < 0) continue;
-            // Near lights: the table only placed the normal; the factors are the pixel's own.
-            const bool from_table = !data.near();
-            measure(
-                i, table.normal(fit.candidate), from_table ? table.diffuse(fit.candidate) : nullptr,
-                from_table ? table.specular(fit.candidate) : nullptr, fit.kd, fit.ks, lights, f, w);
-          }
-        });
-  }
-  Vec3d out;
-  for (int c = 0; c < 3; ++c) {
-    std::vector<double> v;
-    for (std::size_t i = 0; i < ks.size(); ++i)
-      if (ok[i]) v.push_back(ks[i][c]);
-    if (v.empty()) return Vec3d::Zero();
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    out[c] = v[v.size() / 2];
   }
   return out;
 }

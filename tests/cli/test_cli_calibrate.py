@@ -39,10 +39,13 @@ def unit(v):
 
 
 def mirror_images(light, width=SIZE, centres=(CX,), radius=RADIUS, half_width_deg=4.0,
-                  gain=0.8):
+                  gain=0.8, position=None):
     """Mirror balls (centres along the middle row) under one small round source, drawn with the
     reflection written out here, independently of iphong: a Gaussian highlight in directions,
-    its peak `gain` (above 1 the centre is clipped). The picture and the balls' mask."""
+    its peak `gain` (above 1 the centre is clipped). The picture and the balls' mask. With
+    `position` (pixels: x from the image's left, y up from its middle row, z toward the camera,
+    the balls' centres at z = 0) the source is a point light there, seen from each surface point
+    in its own direction."""
     light = unit(light)
     rows, mask = [], []
     for r in range(SIZE):
@@ -54,6 +57,9 @@ def mirror_images(light, width=SIZE, centres=(CX,), radius=RADIUS, half_width_de
                 if dx * dx + dy * dy < 1:
                     nz = math.sqrt(1 - dx * dx - dy * dy)
                     reflected = [2 * nz * dx, 2 * nz * dy, 2 * nz * nz - 1]
+                    if position is not None:
+                        point = [cx + dx * radius, dy * radius, nz * radius]
+                        light = unit([p - q for p, q in zip(position, point)])
                     cos = max(-1.0, min(1.0, sum(a * b for a, b in zip(reflected, light))))
                     angle = math.degrees(math.acos(cos))
                     value = 0.02 + gain * math.exp(-0.5 * (angle / half_width_deg) ** 2)
@@ -316,33 +322,6 @@ def test_estimate_intensities_refuses_a_metallic_object(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
-def mirror_images_near(position, width, centres, radius, half_width_deg=4.0, gain=0.8):
-    """Mirror balls under a point light at `position` (pixels: x right from the image's left, y
-    up from its middle row, z toward the camera, the balls' centres at z = 0): a Gaussian
-    highlight about the direction from each surface point toward the light."""
-    rows, mask = [], []
-    for r in range(SIZE):
-        row, inside = bytearray(), bytearray()
-        for c in range(width):
-            value, on = 0.0, 0
-            for cx in centres:
-                dx, dy = (c + 0.5 - cx) / radius, -(r + 0.5 - CY) / radius
-                if dx * dx + dy * dy < 1:
-                    nz = math.sqrt(1 - dx * dx - dy * dy)
-                    reflected = [2 * nz * dx, 2 * nz * dy, 2 * nz * nz - 1]
-                    point = [cx + dx * radius, dy * radius, nz * radius]
-                    light = unit([p - q for p, q in zip(position, point)])
-                    cos = max(-1.0, min(1.0, sum(a * b for a, b in zip(reflected, light))))
-                    value = 0.02 + gain * math.exp(
-                        -0.5 * (math.degrees(math.acos(cos)) / half_width_deg) ** 2)
-                    on = 255
-            row += bytes([min(255, round(255 * value))] * 3)
-            inside.append(on)
-        rows.append(bytes(row))
-        mask.append(bytes(inside))
-    return png(width, SIZE, rows, 3), png(width, SIZE, mask, 1)
-
-
 def test_two_spheres_under_near_lights_write_the_near_light_layout(tmp_path):
     """Calibrate then solve, two commands: the positions come out in the near-light layout (mm
     with --sphere-radius, camera.json), with how near the lights are stated as numbers."""
@@ -352,7 +331,8 @@ def test_two_spheres_under_near_lights_write_the_near_light_layout(tmp_path):
     positions = [(120 + 250, 60, 200), (120 - 200, -90, 250), (120 + 40, 160, 260),
                  (120 - 120, 150, 300), (120 + 150, -170, 220)]
     for j, p in enumerate(positions):
-        image, mask = mirror_images_near(p, width=240, centres=(40.0, 200.0), radius=30.0)
+        image, mask = mirror_images((0, 0, 1), width=240, centres=(40.0, 200.0), radius=30.0,
+                                    position=p)
         (folder / f"rig.{j + 1}.png").write_bytes(image)
     (folder / "mask.png").write_bytes(mask)
     out = tmp_path / "lights"

@@ -62,6 +62,21 @@ double MeanDepth(const NearCapture& c) {
   return sum / c.data.pixel_count();
 }
 
+// The capture's observations with every pixel at its true surface point, and its true depth and
+// normals (per pixel of the data).
+solve::PhotometricData AtTheTruth(const NearCapture& c, const geometry::HeightMapFrame& frame,
+                                  std::vector<double>* depth, std::vector<Vec3d>* normals) {
+  solve::PhotometricData data = c.data;
+  for (int p : data.pixels) {
+    depth->push_back(c.depth_gt.pixels[p]);
+    const float* n = c.normal_gt.pixels.data() + 3 * p;
+    normals->emplace_back(n[0], n[1], n[2]);
+  }
+  data.points_cam = SurfacePoints(data, frame, *depth);
+  solve::SetReferenceLights(data, solve::MeanPoint(data));
+  return data;
+}
+
 solve::AngularErrorMetrics Errors(const NearResult& r, const NearCapture& c) {
   return solve::CompareNormals(r.normals.normals, c.normal_gt, NonZeroPixels(c.normal_gt));
 }
@@ -70,9 +85,8 @@ TEST(NearLights, TilesHoldEveryPixelWithinTheirTolerance) {
   NearScene s = DomeScene(3, 12, 0, false);
   NearCapture c = RenderNearSphere(s);
   std::vector<double> depth;
-  for (int p : c.data.pixels) depth.push_back(c.depth_gt.pixels[p]);
-  c.data.points_cam = SurfacePoints(c.data, s.frame, depth);
-  solve::SetReferenceLights(c.data, solve::MeanPoint(c.data));
+  std::vector<Vec3d> normals;
+  c.data = AtTheTruth(c, s.frame, &depth, &normals);
   for (double tolerance : {1.0, 4.0}) {
     const std::vector<solve::LightTile> tiles = solve::MakeLightTiles(c.data, tolerance);
     std::size_t covered = 0;
@@ -155,16 +169,9 @@ TEST(NearLights, RingRoundTheLensFindsTheDistanceFromTheImages) {
 TEST(NearLights, MisfitIsLowestAtTheTrueSurface) {
   NearScene s = RingScene(true);
   const NearCapture c = RenderNearSphere(s);
-  solve::PhotometricData data = c.data;
   std::vector<double> depth;
   std::vector<Vec3d> normals;
-  for (int p : data.pixels) {
-    depth.push_back(c.depth_gt.pixels[p]);
-    const float* n = c.normal_gt.pixels.data() + 3 * p;
-    normals.emplace_back(n[0], n[1], n[2]);
-  }
-  data.points_cam = SurfacePoints(data, s.frame, depth);
-  solve::SetReferenceLights(data, solve::MeanPoint(data));
+  const solve::PhotometricData data = AtTheTruth(c, s.frame, &depth, &normals);
   const std::vector<std::size_t> sample = solve::SpreadIndices(data.pixel_count(), 1000);
   solve::PixelFitSettings fit;
   fit.model.lobe = reflectance::Lobe::kPhong;
@@ -184,16 +191,9 @@ TEST(NearLights, MisfitIsLowestAtTheTrueSurface) {
 TEST(NearLights, LightsThatMissTheSurfaceAreCharged) {
   NearScene s = DomeScene(3, 12, 4, false);
   const NearCapture c = RenderNearSphere(s);
-  solve::PhotometricData data = c.data;
   std::vector<double> depth;
   std::vector<Vec3d> normals;
-  for (int p : data.pixels) {
-    depth.push_back(c.depth_gt.pixels[p]);
-    const float* n = c.normal_gt.pixels.data() + 3 * p;
-    normals.emplace_back(n[0], n[1], n[2]);
-  }
-  data.points_cam = SurfacePoints(data, s.frame, depth);
-  solve::SetReferenceLights(data, solve::MeanPoint(data));
+  const solve::PhotometricData data = AtTheTruth(c, s.frame, &depth, &normals);
   const std::vector<std::size_t> sample = solve::SpreadIndices(data.pixel_count(), 500);
   solve::PixelFitSettings fit;
   fit.model.lobe = reflectance::Lobe::kLambert;

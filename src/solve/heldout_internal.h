@@ -1,0 +1,41 @@
+// The held-out costs the model choice (model_choice.cc) compares models by, and the object's
+// typical ks; not part of the public interface (model_choice.h has PixelHeldOutCosts).
+#pragma once
+
+#include <vector>
+
+#include "solve/model_choice.h"
+
+namespace iphong::solve::internal {
+
+// A pixel of the choice's sample, its luminance observations as the fit reads them.
+struct Sample {
+  std::size_t pixel = 0;
+  std::vector<double> y, usable;  // K each
+  double threshold = 0;
+};
+
+// The mean held-out cost of one model over the sample, its standard error and the mean angle
+// between the two halves' normals (set in m). Each fold's normal is the global search's on its
+// training lights (per tile of the sample under near lights: solve/light_tiles.h), refined by
+// the local fit (pixel_fit.h) on the same lights: a candidate on the grid is up to half its
+// spacing (~2°) from the training optimum, and a sharp lobe predicted from a normal that far off
+// loses to a broad one for that reason alone (a noise-free render of Phong n 30 chose n 38.6 from
+// grid normals, 29.6 with 16 times as many candidates). With settings.starts each fold's normal
+// is refined from the start instead (no search). Returns the per-pixel costs, for paired
+// comparisons.
+std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
+                                const std::vector<Sample>& sample, const std::vector<int>& fold,
+                                const ModelChoiceSettings& settings);
+
+// Pixels spread over the object (SpreadIndices) with at least 3 usable observations (in each
+// fold's training lights, with `fold`).
+std::vector<Sample> SamplePixels(const PhotometricData& data, const ModelChoiceSettings& settings,
+                                 const std::vector<int>* fold);
+
+// The object's typical ks (RGB) under `model`: the median over the sample of each pixel's ks at
+// its searched (or started) normal, with its censoring.
+Vec3d SharedSpecular(const PhotometricData& data, const ModelCandidate& model,
+                     const ModelChoiceSettings& settings);
+
+}  // namespace iphong::solve::internal
