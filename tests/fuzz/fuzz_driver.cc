@@ -48,6 +48,11 @@ std::vector<std::string> Seeds(const fs::path& fixtures) {
   add(7, R"({"lights": [{"lightId": 0, "type": "directional", "direction": [0, 0, -1],
              "intensity": [1, 2, 3]}, {"lightId": 1, "direction": [0.6, 0, -0.8], "intensity": 1},
              {"direction": [0, -0.6, -0.8]}]})");
+  add(8, R"({"fx": 700, "fy": 700.5, "cx": 159.5, "cy": 127.5, "width": 320})");
+  add(8, R"({"pixel_size": 0.25})");
+  std::string anisotropy;
+  for (int i = 0; i < 12; ++i) anisotropy += i % 3 ? "1\n" : "0.5\n";
+  add(9, anisotropy);
   for (const char* folder : {"scenes", "bad/scenes"}) {
     for (const auto& entry : fs::directory_iterator(fixtures / folder)) {
       if (entry.path().extension() == ".json") add(5, Read(entry.path()));
