@@ -61,12 +61,39 @@ std::vector<std::string> Seeds(const fs::path& fixtures) {
   return seeds;
 }
 
-const char* const kTokens[] = {
-    "1e400", "-1e400", "nan", "inf", "-0", "4294967328", "9223372036854775808", "1e308",
-    "0x1p3", "[", "]", "{", "}", "\"", ",", ":", "\n", "\r", "\t", "\\u0000", "\\n", "null",
-    "true", "[[[[[[[[[[[[[[[[[[[[[[[[", "\"count\": 100000", "\"subdivisions\": 9",
-    "\"divisions\": 8192", "\"resolution\": [65536, 65536]", "\"fov_deg\": 180", "\xff\xfe",
-    "\"shape\": \"mesh\", \"path\": \"/dev/zero\"", "\"type\": \"ring\"", "1e-320"};
+const char* const kTokens[] = {"1e400",
+                               "-1e400",
+                               "nan",
+                               "inf",
+                               "-0",
+                               "4294967328",
+                               "9223372036854775808",
+                               "1e308",
+                               "0x1p3",
+                               "[",
+                               "]",
+                               "{",
+                               "}",
+                               "\"",
+                               ",",
+                               ":",
+                               "\n",
+                               "\r",
+                               "\t",
+                               "\\u0000",
+                               "\\n",
+                               "null",
+                               "true",
+                               "[[[[[[[[[[[[[[[[[[[[[[[[",
+                               "\"count\": 100000",
+                               "\"subdivisions\": 9",
+                               "\"divisions\": 8192",
+                               "\"resolution\": [65536, 65536]",
+                               "\"fov_deg\": 180",
+                               "\xff\xfe",
+                               "\"shape\": \"mesh\", \"path\": \"/dev/zero\"",
+                               "\"type\": \"ring\"",
+                               "1e-320"};
 
 std::string Mutate(std::string input, std::mt19937_64& rng) {
   auto pick = [&](std::size_t n) { return n == 0 ? 0 : static_cast<std::size_t>(rng() % n); };

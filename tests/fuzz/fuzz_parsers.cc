@@ -1,8 +1,9 @@
 // Fuzz target for the text iphong reads: filenames.txt, the light files (every format),
 // normal.txt, material.json, scene files and the near-light layout's camera.json and
-// light_anisotropy.txt. The first byte picks the parser, the rest is the text. Every input must end in a
-// result or in an exception whose message is one line starting with the file it names; anything
-// else (a crash, a sanitizer report, std::bad_alloc, a multi-line or unnamed message) is a finding.
+// light_anisotropy.txt. The first byte picks the parser, the rest is the text. Every input must end
+// in a result or in an exception whose message is one line starting with the file it names;
+// anything else (a crash, a sanitizer report, std::bad_alloc, a multi-line or unnamed message) is a
+// finding.
 //
 // Built two ways: with clang's libFuzzer (scripts/fuzz.sh, for long runs by hand) and, with any
 // compiler, with fuzz_driver.cc's bounded deterministic mutation (the `fuzz.parsers` test).
@@ -30,24 +31,41 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size == 0) return 0;
   const std::string text(reinterpret_cast<const char*>(data) + 1, size - 1);
   static const char* const kSources[] = {
-      "filenames.txt", "light_directions.txt", "light_intensities.txt", "normal.txt",
-      "material.json", "scene.json",           "capture.lp",            "lights.json",
-      "camera.json",   "light_anisotropy.txt"};
+      "filenames.txt",       "light_directions.txt", "light_intensities.txt",
+      "normal.txt",          "material.json",        "scene.json",
+      "capture.lp",          "lights.json",          "camera.json",
+      "light_anisotropy.txt"};
   const int parser = data[0] % 10;
   const std::string source = kSources[parser];
   try {
     using namespace iphong::io;
     std::vector<std::string> warnings;
     switch (parser) {
-      case 0: ParseFilenames(text, source, 1000); break;
-      case 1: ParseLightDirections(text, source, 12, &warnings); break;
-      case 2: ParseLightIntensities(text, source, 3); break;
-      case 3: ParseNormalText(text, source, 4, 3); break;
-      case 4: ParseMaterialJson(text, source); break;
+      case 0:
+        ParseFilenames(text, source, 1000);
+        break;
+      case 1:
+        ParseLightDirections(text, source, 12, &warnings);
+        break;
+      case 2:
+        ParseLightIntensities(text, source, 3);
+        break;
+      case 3:
+        ParseNormalText(text, source, 4, 3);
+        break;
+      case 4:
+        ParseMaterialJson(text, source);
+        break;
       case 6:
-      case 7: ParseLightFile(text, source, 0, &warnings, 1000); break;
-      case 8: ParseCameraJson(text, source, &warnings); break;
-      case 9: ParseScalars(text, source, 12); break;
+      case 7:
+        ParseLightFile(text, source, 0, &warnings, 1000);
+        break;
+      case 8:
+        ParseCameraJson(text, source, &warnings);
+        break;
+      case 9:
+        ParseScalars(text, source, 12);
+        break;
       default: {
         // No files are read from a fuzzed scene (base folder "": relative mesh paths do not
         // exist), and what the shapes would build is held to 64 MB.
