@@ -13,11 +13,13 @@
 #include "io/files.h"
 #include "io/image_io.h"
 #include "io/material_pictures.h"
+#include "io/near_capture.h"
 #include "io/output_folder.h"
 #include "io/visualize.h"
 #include "iphong/commands.h"
 #include "iphong/console.h"
 #include "material/fit.h"
+#include "near/near.h"
 
 namespace iphong::cli {
 namespace {
@@ -37,6 +39,48 @@ struct FitMaterialCommandOptions {
   CaptureFlags capture;
   CommonOptions common;
 };
+
+// The fit takes every light as distant, seen from the object's centre. Under near lights that
+// bends the coefficients (a broad lobe and a wrong kd imitate the irradiance's fall-off), so say
+// how near they are, as calibrate-lights does: how far their directions turn across the object
+// (2·asin(r/d), r half the mask's larger side at the layout's distance), warned from a degree on.
+void WarnNearLights(const io::Dataset& dataset, const solve::PhotometricData& data) {
+  const io::NearLightFiles& near = dataset.files.near;
+  if (!near.present() || data.pixels.empty()) return;
+  double distance = near::GuessDistance(
+      io::NearPointLights(near, std::vector<Vec3d>(near.positions_mm.size(), Vec3d::Ones())));
+  if (!(distance > 0)) {
+    std::vector<double> far;
+    for (const Vec3d& s : near.positions_mm) far.push_back(s.norm());
+    std::sort(far.begin(), far.end());
+    distance = far[far.size() / 2];
+  }
+  const geometry::HeightMapFrame frame = near.frame();
+  const double value = frame.perspective ? distance : -distance;
+  Vec3d lo = Vec3d::Constant(HUGE_VAL), hi = -lo;
+  for (int p : data.pixels) {
+    const Vec3d x = geometry::HeightMapPoint(frame, data.width, data.height, p % data.width,
+                                             p / data.width, value);
+    lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+  }
+  const Vec3d centre = 0.5 * (lo + hi);
+  const double radius = 0.5 * (hi - lo).head<2>().maxCoeff();
+  double worst = 0, nearest = HUGE_VAL;
+  for (const Vec3d& s : near.positions_mm) {
+    const double d = (s - centre).norm();
+    nearest = std::min(nearest, d);
+    worst = std::max(worst, 2 * std::asin(std::min(1.0, radius / std::max(d, 1e-12))) * 180 / M_PI);
+  }
+  if (worst < 1) return;
+  char text[400];
+  std::snprintf(text, sizeof text,
+                ": the lights are point lights, the nearest %.3g object sizes away: their "
+                "directions turn by up to %.2g deg across the object, and fit-material takes them "
+                "as distant (seen from its centre), so the coefficients absorb their fall-off; fit "
+                "a capture with distant lights for a material to trust",
+                nearest / (2 * radius), worst);
+  Warn(near.positions_path + text);
+}
 
 // JSON has no NaN: a standard error that does not exist is null.
 nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
@@ -194,6 +238,7 @@ void RunFitMaterial(const FitMaterialCommandOptions& o) {
     throw std::runtime_error(o.dataset + ": " + m);
   }
   ReportCapture(o.dataset, dataset, o.common);
+  WarnNearLights(dataset, data);
 
   std::string normals_source;
   const ImageF normal_map = LoadNormals(o, dataset, &normals_source);

@@ -4,6 +4,7 @@ point lights (light_positions.txt, camera.json, LED axes and anisotropy, Depth_g
 and every bad near-light file is one line naming the file and the line, with nothing written."""
 import json
 import math
+import re
 import shutil
 
 import pytest
@@ -80,6 +81,30 @@ def test_positions_alone_are_enough(rendered, tmp_path):
     code, out, err = run("normals", ds, "-o", tmp_path / "res", "--model", "lambert", "--json")
     assert code == 0, err
     assert "positions (near lights)" in json.loads(out)["input"]["lights_format"]
+
+
+def test_fit_material_says_how_near_the_lights_are(rendered, tmp_path):
+    # fit-material takes lights as distant: on the dome (150 mm round a sphere of radius 50) it
+    # says so with the closed form, 150/100 = 1.5 object sizes, 2*asin(50/150) = 38.9 deg.
+    pattern = (r"light_positions.txt: the lights are point lights, the nearest ([0-9.]+) object "
+               r"sizes away: their directions turn by up to ([0-9.]+) deg")
+    code, out, err = run("fit-material", rendered, "--normals", rendered, "-o", tmp_path / "fit")
+    assert code == 0, err
+    found = re.search(pattern, err)
+    assert found, err
+    assert float(found.group(1)) == pytest.approx(1.5, abs=0.05)
+    assert float(found.group(2)) == pytest.approx(38.9, abs=1.5)
+    # A lens of 100 times the focal length sees an object of 1 mm in the same pixels: its
+    # directions turn by 2*asin(0.5/150) = 0.38 deg, and nothing is said.
+    far = tmp_path / "far"
+    user_copy(rendered, far)
+    camera = json.loads((far / "camera.json").read_text())
+    camera["fx"] *= 100
+    camera["fy"] *= 100
+    (far / "camera.json").write_text(json.dumps(camera))
+    code, out, err = run("fit-material", far, "--normals", rendered, "-o", tmp_path / "fit2")
+    assert code == 0, err
+    assert "point lights" not in err
 
 
 def replace_line(path, index, text):
