@@ -14,6 +14,10 @@ packages=(
   python3-dask python3-distributed
   # The relighting viewer's test renders its WebGL page headless (SwiftShader, no GPU needed).
   chromium
+  # pip install . into a virtual environment (pyproject.toml builds with setuptools and CMake).
+  python3-pip python3-venv python3-setuptools
+  # The documentation site (docs/, built by the test command with warnings as errors).
+  python3-sphinx python3-myst-parser python3-sphinx-rtd-theme
 )
 
 missing=()

@@ -7,6 +7,7 @@
 
 #include "calibrate/lights.h"
 #include "core/timing.h"
+#include "core/version.h"
 #include "io/calibration_picture.h"
 #include "io/dataset.h"
 #include "io/dataset_text.h"
@@ -170,6 +171,7 @@ void RunCalibrate(const CalibrateOptions& o) {
   auto name = [&](int j) { return dataset.files.paths[j]; };
 
   nlohmann::json report;
+  report["iphong_version"] = kVersion;
   report["images"] = o.images;
   report["method"] = known_normals ? "known normals" : o.sphere + " sphere";
   report["camera"] = camera.perspective() ? nlohmann::json{{"fx", camera.fx},

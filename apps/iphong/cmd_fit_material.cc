@@ -9,6 +9,7 @@
 
 #include "calibrate/lights.h"
 #include "core/timing.h"
+#include "core/version.h"
 #include "io/dataset.h"
 #include "io/files.h"
 #include "io/image_io.h"
@@ -307,6 +308,7 @@ void RunFitMaterial(const FitMaterialCommandOptions& o) {
                                           : "; kd varies per region: fit.json, albedo.exr");
 
   nlohmann::json report;
+  report["iphong_version"] = kVersion;
   report["dataset"] = o.dataset;
   report["normals"] = normals_source;
   report["chosen"] = reflectance::LobeName(best.lobe);

@@ -8,6 +8,7 @@
 #include "calibrate/lights.h"
 #include "core/errors.h"
 #include "core/timing.h"
+#include "core/version.h"
 #include "integrate/integrate.h"
 #include "io/dataset.h"
 #include "io/dataset_text.h"
@@ -128,6 +129,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   fit_progress.reset();  // clears its line
   const ImageF& ambiguity = result.ambiguity_deg;
 
+  metrics["iphong_version"] = kVersion;
   metrics["dataset"] = o.dataset;
   metrics["input"] = NormalsInputJson(dataset);
   metrics["pixels"] = data.pixel_count();

@@ -8,6 +8,7 @@
 #include "core/errors.h"
 #include "core/parallel.h"
 #include "core/timing.h"
+#include "core/version.h"
 #include "io/files.h"
 #include "io/image_rows.h"
 #include "io/visualize.h"
@@ -186,6 +187,7 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
   }
 
   nlohmann::json metrics;
+  metrics["iphong_version"] = kVersion;
   metrics["dataset"] = o.dataset;
   metrics["input"] = NormalsInputJson(dataset);
   metrics["pixels"] = result.summary.pixels;

@@ -1,4 +1,5 @@
 #include "io/dataset_write.h"
+#include "core/version.h"
 
 #include <nlohmann/json.hpp>
 
@@ -240,6 +241,7 @@ void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const rende
   WriteImage(file("albedo.exr"), output.albedo);
   nlohmann::json meta;
   meta["generator"] = "iphong render";
+  meta["iphong_version"] = kVersion;
   meta["images"] = per_light ? output.per_light.size() : 1;
   meta["format"] = settings.format;
   meta["bits"] = settings.format == "exr" ? 32 : settings.bits;

@@ -1,4 +1,5 @@
 #include "io/surface.h"
+#include "core/version.h"
 
 #include <algorithm>
 #include <cmath>
@@ -91,6 +92,7 @@ SurfaceFiles WriteSurfaceFiles(OutputFolder& out, const std::string& prefix,
     if (std::isfinite(v)) lo = std::min<double>(lo, v), hi = std::max<double>(hi, v);
   }
   nlohmann::json report = {
+      {"iphong_version", kVersion},
       {"method", integrate::MethodName(s.method)},
       {"solver", s.solver},
       {"pixels", s.pixels},
