@@ -193,7 +193,7 @@ void BindReflectance(py::module_& m) {
       R"doc(Evaluate the reflection model.
 
 normal: (3,) or (..., 3) surface normals in the camera frame (x right, y up, z toward the
-    viewer); normalized here, zero length is an error unless masked out.
+viewer); normalized here, zero length is an error unless masked out.
 view: (3,) or the shape of normal; direction from the surface toward the viewer.
 lights: list of DirectionalLight / PointLight; ambient: RGB triple or number (Ia).
 position: surface points (shape of normal), needed for point lights.

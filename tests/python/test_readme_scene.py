@@ -1,4 +1,4 @@
-"""The README's example scene is the fixture it shows, and renders a picture a person would want:
+"""The rendering guide's example scene (docs/guides/rendering.md) is the fixture it shows, and renders a picture a person would want:
 nothing blown out, every object inside the frame."""
 import json
 import re
@@ -12,7 +12,7 @@ SCENE = FIXTURES / "scenes" / "readme_example.json"
 
 
 def test_the_readme_shows_the_fixture():
-    readme = (ROOT / "README.md").read_text()
+    readme = (ROOT / "docs" / "guides" / "rendering.md").read_text()
     blocks = [json.loads(b) for b in re.findall(r"```json\n(.*?)```", readme, re.S)]
     assert json.loads(SCENE.read_text()) in blocks
 
