@@ -157,6 +157,11 @@ bool SolveNear(const solve::PhotometricData& data, const solve::NormalOptions& o
           py::dict(py::arg("distance_px") = r.distance_px, py::arg("chosen") = r.chosen,
                    py::arg("object_size_px") = r.object_size_px, py::arg("test") = r.criterion,
                    py::arg("heldout_gain") = r.gain, py::arg("heldout_gain_error") = r.gain_error,
+                   py::arg("model_loss_at_diffuse_distance") =
+                       std::isnan(r.model_loss) ? py::object(py::none()) : py::float_(r.model_loss),
+                   py::arg("model_loss_error") = std::isnan(r.model_loss_error)
+                                                     ? py::object(py::none())
+                                                     : py::float_(r.model_loss_error),
                    py::arg("candidates") = candidates, py::arg("seconds") = r.seconds);
     } else {
       return false;

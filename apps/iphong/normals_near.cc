@@ -186,6 +186,12 @@ near::EffectiveDistanceResult SolveWithEffectiveDistance(const NormalsCommandOpt
       {"test", r.criterion},
       {"heldout_gain", r.gain},
       {"heldout_gain_error", r.gain_error},
+      // Where the diffuse test proposed a D: the object's model's loss there (refused beyond its
+      // standard error); null when not asked.
+      {"model_loss_at_diffuse_distance",
+       std::isnan(r.model_loss) ? nlohmann::json() : nlohmann::json(r.model_loss)},
+      {"model_loss_error",
+       std::isnan(r.model_loss_error) ? nlohmann::json() : nlohmann::json(r.model_loss_error)},
       {"candidates", candidates},
       {"passes", passes},
       {"distant_seconds", r.distant_seconds},

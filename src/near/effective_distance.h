@@ -58,6 +58,10 @@ struct EffectiveDistanceResult {
   // by the test that chose it ("model" or "diffuse"; "" for D = ∞).
   double gain = 0, gain_error = 0;
   std::string criterion;
+  // Where the diffuse test proposed a D: the object's model's held-out loss there over D = ∞ and
+  // its standard error (the D is refused when the loss exceeds it); NaN when not asked.
+  double model_loss = std::numeric_limits<double>::quiet_NaN();
+  double model_loss_error = std::numeric_limits<double>::quiet_NaN();
   bool chosen = false;  // false: given (distance_px), not chosen
   std::vector<NearPass> passes;
   ImageF height;  // 1 channel: the last surface's heights in pixels (NaN outside), finite D only
