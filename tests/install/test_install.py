@@ -130,3 +130,23 @@ def test_the_changelog_and_citation_name_this_version():
     assert re.search(rf"^## \[{re.escape(VERSION)}\] - \d{{4}}-\d{{2}}-\d{{2}}$", changelog, re.M)
     citation = (ROOT / "CITATION.cff").read_text()
     assert re.search(rf"^version: {re.escape(VERSION)}$", citation, re.M)
+
+
+def test_every_installed_header_compiles_on_its_own(prefix):
+    """A user includes any one public header first: each must bring what it needs."""
+    from concurrent.futures import ThreadPoolExecutor
+    pc_dir = next(prefix.rglob("iphong.pc")).parent
+    flags = run("pkg-config", "--cflags", "iphong",
+                env={**os.environ, "PKG_CONFIG_PATH": str(pc_dir)}).split()
+    include = prefix / "include" / "iphong"
+    headers = sorted(h.relative_to(include).as_posix() for h in include.rglob("*.h"))
+    assert len(headers) > 50
+
+    def check(header):
+        result = subprocess.run(["c++", *flags, "-fsyntax-only", "-x", "c++", "-"],
+                                input=f'#include "{header}"\n', capture_output=True, text=True)
+        return header, result.returncode, result.stderr[:500]
+
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 2) as pool:
+        failed = [(h, err) for h, code, err in pool.map(check, headers) if code != 0]
+    assert not failed, failed
