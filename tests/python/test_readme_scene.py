@@ -26,3 +26,12 @@ def test_the_example_renders_well_exposed_and_in_frame():
     assert np.median(inside.max(axis=1)) > 0.15  # and not dark either
     # Nothing cut by the frame: no object pixel on the border.
     assert not (mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any())
+
+
+def test_the_readme_links_resolve():
+    """The front page links into the docs: every relative link names a file that exists."""
+    readme = (ROOT / "README.md").read_text()
+    links = re.findall(r"\]\(([^)#:]+)(?:#[^)]*)?\)", readme)
+    assert len(links) > 20
+    missing = [link for link in links if not (ROOT / link).exists()]
+    assert not missing, missing
