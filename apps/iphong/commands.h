@@ -11,7 +11,7 @@
 
 namespace iphong::cli {
 
-// Exit codes (README, "Command line"); a signal ends the process as that signal (128 + n).
+// Exit codes (docs/cli.md, "Errors and exit codes"); a signal ends the process as that signal (128 + n).
 constexpr int kExitInput = 1;      // a file or value is wrong
 constexpr int kExitUsage = 2;      // the command line is wrong
 constexpr int kExitResources = 3;  // the request exceeds the memory limit

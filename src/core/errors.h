@@ -1,5 +1,5 @@
 // What went wrong, by kind, so the command line can choose its exit code and Python its
-// exception (README, "Command line"):
+// exception (docs/cli.md, "Errors and exit codes"):
 //
 //   std::runtime_error, invalid_argument   bad input (a file or value)    exit 1, ValueError
 //   ResourceError                          over the memory limit          exit 3, ValueError
