@@ -20,7 +20,6 @@
 #include "iphong/commands.h"
 #include "iphong/console.h"
 #include "material/fit.h"
-#include "near/near.h"
 
 namespace iphong::cli {
 namespace {
@@ -48,14 +47,7 @@ struct FitMaterialCommandOptions {
 void WarnNearLights(const io::Dataset& dataset, const solve::PhotometricData& data) {
   const io::NearLightFiles& near = dataset.files.near;
   if (!near.present() || data.pixels.empty()) return;
-  double distance = near::GuessDistance(
-      io::NearPointLights(near, std::vector<Vec3d>(near.positions_mm.size(), Vec3d::Ones())));
-  if (!(distance > 0)) {
-    std::vector<double> far;
-    for (const Vec3d& s : near.positions_mm) far.push_back(s.norm());
-    std::sort(far.begin(), far.end());
-    distance = far[far.size() / 2];
-  }
+  const double distance = io::LayoutDistanceMm(near);
   const geometry::HeightMapFrame frame = near.frame();
   const double value = frame.perspective ? distance : -distance;
   Vec3d lo = Vec3d::Constant(HUGE_VAL), hi = -lo;

@@ -109,31 +109,15 @@ std::string FormatLp(const std::vector<std::string>& names, const std::vector<Ve
   return text;
 }
 
-std::vector<Vec3d> ParseTriples(const std::string& text, const std::string& source,
-                                std::size_t expected, const std::string& count_source,
-                                std::vector<int>* lines) {
-  std::vector<Vec3d> triples;
-  if (lines) lines->clear();
-  for (const auto& [number, line] : Lines(text)) {
-    if (triples.size() == expected) {
-      Fail(source,
-           "has more lines than the " + std::to_string(expected) + " images in " + count_source,
-           number);
-    }
-    triples.push_back(Triple(line, source, number));
-    if (lines) lines->push_back(number);
-  }
-  if (triples.size() != expected) {
-    Fail(source, "has " + std::to_string(triples.size()) + " lines for " +
-                     std::to_string(expected) + " images in " + count_source);
-  }
-  return triples;
-}
+namespace {
 
-std::vector<double> ParseScalars(const std::string& text, const std::string& source,
-                                 std::size_t expected, const std::string& count_source,
-                                 std::vector<int>* lines) {
-  std::vector<double> values;
+// One value per line, `expected` of them (the images counted in `count_source`): a line beyond
+// them names itself, too few name the count. parse_one(line, number) reads one value.
+template <typename T, typename ParseOne>
+std::vector<T> ParseCounted(const std::string& text, const std::string& source,
+                            std::size_t expected, const std::string& count_source,
+                            std::vector<int>* lines, ParseOne parse_one) {
+  std::vector<T> values;
   if (lines) lines->clear();
   for (const auto& [number, line] : Lines(text)) {
     if (values.size() == expected) {
@@ -141,15 +125,7 @@ std::vector<double> ParseScalars(const std::string& text, const std::string& sou
            "has more lines than the " + std::to_string(expected) + " images in " + count_source,
            number);
     }
-    if (line.find('\0') != std::string::npos) Fail(source, "not a text file", number);
-    const char* p = line.c_str();
-    char* end = nullptr;
-    const double value = std::strtod(p, &end);
-    if (end == p || std::string(end).find_first_not_of(" \t,") != std::string::npos) {
-      Fail(source, "expected one number, got '" + Shown(line) + "'", number);
-    }
-    if (!std::isfinite(value)) Fail(source, "not a finite number: '" + Shown(line) + "'", number);
-    values.push_back(value);
+    values.push_back(parse_one(line, number));
     if (lines) lines->push_back(number);
   }
   if (values.size() != expected) {
@@ -157,6 +133,35 @@ std::vector<double> ParseScalars(const std::string& text, const std::string& sou
                      " images in " + count_source);
   }
   return values;
+}
+
+}  // namespace
+
+std::vector<Vec3d> ParseTriples(const std::string& text, const std::string& source,
+                                std::size_t expected, const std::string& count_source,
+                                std::vector<int>* lines) {
+  return ParseCounted<Vec3d>(
+      text, source, expected, count_source, lines,
+      [&](const std::string& line, int number) { return Triple(line, source, number); });
+}
+
+std::vector<double> ParseScalars(const std::string& text, const std::string& source,
+                                 std::size_t expected, const std::string& count_source,
+                                 std::vector<int>* lines) {
+  return ParseCounted<double>(
+      text, source, expected, count_source, lines, [&](const std::string& line, int number) {
+        if (line.find('\0') != std::string::npos) Fail(source, "not a text file", number);
+        const char* p = line.c_str();
+        char* end = nullptr;
+        const double value = std::strtod(p, &end);
+        if (end == p || std::string(end).find_first_not_of(" \t,") != std::string::npos) {
+          Fail(source, "expected one number, got '" + Shown(line) + "'", number);
+        }
+        if (!std::isfinite(value)) {
+          Fail(source, "not a finite number: '" + Shown(line) + "'", number);
+        }
+        return value;
+      });
 }
 
 CameraIntrinsics ParseCameraJson(const std::string& text, const std::string& source,

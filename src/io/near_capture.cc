@@ -135,17 +135,19 @@ std::vector<reflectance::Light> NearPointLights(const NearLightFiles& files,
   return lights;
 }
 
-std::vector<Vec3d> DirectionsFromPositions(const NearLightFiles& files) {
+double LayoutDistanceMm(const NearLightFiles& files) {
   const std::vector<reflectance::Light> lights =
       NearPointLights(files, std::vector<Vec3d>(files.positions_mm.size(), Vec3d::Ones()));
-  double distance = near::GuessDistance(lights);
-  if (!(distance > 0)) {
-    std::vector<double> far;
-    for (const Vec3d& s : files.positions_mm) far.push_back(s.norm());
-    std::nth_element(far.begin(), far.begin() + far.size() / 2, far.end());
-    distance = std::max(far[far.size() / 2], 1e-3);
-  }
-  const Vec3d object(0, 0, -distance);
+  if (const double distance = near::GuessDistance(lights); distance > 0) return distance;
+  std::vector<double> far;
+  for (const Vec3d& s : files.positions_mm) far.push_back(s.norm());
+  if (far.empty()) return 1e-3;
+  std::nth_element(far.begin(), far.begin() + far.size() / 2, far.end());
+  return std::max(far[far.size() / 2], 1e-3);
+}
+
+std::vector<Vec3d> DirectionsFromPositions(const NearLightFiles& files) {
+  const Vec3d object(0, 0, -LayoutDistanceMm(files));
   std::vector<Vec3d> out;
   for (const Vec3d& s : files.positions_mm) {
     const Vec3d d = s - object;

@@ -48,9 +48,13 @@ NearLightFiles FindNearLights(const std::string& directory, std::size_t count,
 std::vector<reflectance::Light> NearPointLights(const NearLightFiles& files,
                                                 const std::vector<Vec3d>& intensities);
 
+// The object's distance along the optical axis (mm) as the lights' layout places it:
+// near::GuessDistance, else the lights' median distance from the camera.
+double LayoutDistanceMm(const NearLightFiles& files);
+
 // Unit directions toward the lights from the object as their layout places it (the point on the
-// optical axis at near::GuessDistance, else at the lights' median distance): the directions a
-// near-light capture without light_directions.txt is shown and checked with.
+// optical axis at LayoutDistanceMm): the directions a near-light capture without
+// light_directions.txt is shown and checked with.
 std::vector<Vec3d> DirectionsFromPositions(const NearLightFiles& files);
 
 // With light_directions.txt beside light_positions.txt: throws "light_directions.txt:LINE:"

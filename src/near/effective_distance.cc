@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "core/golden_section.h"
 #include "core/timing.h"
 #include "near/internal.h"
 #include "reflectance/material.h"
@@ -196,18 +197,8 @@ EffectiveDistanceResult SolveEffectiveDistance(const PhotometricData& data,
         const double step_lo = g > 0 ? kDistanceGrid[g - 1] : kDistanceGrid[0] / 1.5;
         const double step_hi =
             g + 1 < std::size(kDistanceGrid) ? kDistanceGrid[g + 1] : kDistanceGrid[g];
-        double lo = std::log(step_lo * result.object_size_px);
-        double hi = std::log(step_hi * result.object_size_px);
-        const double r = (std::sqrt(5.0) - 1) / 2;
-        double x1 = hi - r * (hi - lo), x2 = lo + r * (hi - lo);
-        double f1 = score(std::exp(x1)), f2 = score(std::exp(x2));
-        for (int i = 0; i < 4; ++i) {
-          if (f1 < f2) {
-            hi = x2, x2 = x1, f2 = f1, x1 = hi - r * (hi - lo), f1 = score(std::exp(x1));
-          } else {
-            lo = x1, x1 = x2, f1 = f2, x2 = lo + r * (hi - lo), f2 = score(std::exp(x2));
-          }
-        }
+        GoldenSectionLog(step_lo * result.object_size_px, step_hi * result.object_size_px, 4,
+                         score);
         for (std::size_t i = 1; i < costs.size(); ++i) {
           if (cost_of(i) < cost_of(best)) best = i;
         }

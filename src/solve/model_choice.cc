@@ -1,4 +1,5 @@
 #include "solve/model_choice.h"
+#include "core/golden_section.h"
 
 #include <algorithm>
 #include <array>
@@ -229,18 +230,8 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
       if (start.shininess * f >= MinimumShininess(lobe)) evaluate(start.shininess * f);
     }
     const double centre = choice.scored[*best_of(choice.scored.size(), &start)].shininess;
-    double lo = std::log(std::max(centre / std::sqrt(2.0), MinimumShininess(lobe)));
-    double hi = std::log(centre * std::sqrt(2.0));
-    const double g = (std::sqrt(5.0) - 1) / 2;
-    double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
-    double f1 = evaluate(std::exp(x1)), f2 = evaluate(std::exp(x2));
-    for (int i = 0; i < 3; ++i) {
-      if (f1 < f2) {
-        hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = evaluate(std::exp(x1));
-      } else {
-        lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = evaluate(std::exp(x2));
-      }
-    }
+    GoldenSectionLog(std::max(centre / std::sqrt(2.0), MinimumShininess(lobe)),
+                     centre * std::sqrt(2.0), 3, evaluate);
     // The other readings of the observations at the refined shininess, so that a reading is
     // chosen at the same lobe and not by which one had the better grid point (a grid step of 2
     // can cost more than the reading does: a truncated 8-bit sphere of Phong 50 kept its codes
