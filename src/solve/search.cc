@@ -3,16 +3,10 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 #include "solve/internal.h"
 
 namespace iphong::solve {
-namespace {
-
-using VecF = Eigen::Map<const Eigen::VectorXf>;
-
-}  // namespace
 
 std::vector<Vec3d> HemisphereDirections(int count) {
   std::vector<Vec3d> out;
@@ -34,13 +28,12 @@ CandidateTable::CandidateTable(const std::vector<Vec3d>& light_dir_cam,
       fold_(fold),
       normals_(HemisphereDirections(count)) {
   const std::vector<Vec3d> coarse = HemisphereDirections(std::max(4, count / 4));
-  normals_.insert(normals_.end(), coarse.begin(), coarse.end());
-  members_.resize(coarse.size());
   // The spiral's z is (i + 0.5)/m, and two directions an angle a apart differ in z by at most a,
   // so the nearest coarse direction — within the coarse spacing — is among those whose z lies
   // within twice that spacing (exact, and m/(4·sqrt(2πm)) times fewer comparisons than all).
   const int m = static_cast<int>(coarse.size());
   const double window = 2 * std::sqrt(2 * M_PI / m);
+  std::vector<std::vector<int>> owned(m);
   for (int f = 0; f < count; ++f) {
     const double z = normals_[f].z();
     const int lo = std::clamp(static_cast<int>(std::floor((z - window) * m - 0.5)), 0, m - 1);
@@ -49,8 +42,20 @@ CandidateTable::CandidateTable(const std::vector<Vec3d>& light_dir_cam,
     for (int c = lo + 1; c <= hi; ++c) {
       if (coarse[c].dot(normals_[f]) > coarse[nearest].dot(normals_[f])) nearest = c;
     }
-    members_[nearest].push_back(f);
+    owned[nearest].push_back(f);
   }
+  // The fine directions stored grouped by their coarse one, so each group is scored as one range.
+  std::vector<Vec3d> fine;
+  fine.reserve(count);
+  members_.resize(m);
+  for (int c = 0; c < m; ++c) {
+    for (const int f : owned[c]) {
+      members_[c].push_back(static_cast<int>(fine.size()));
+      fine.push_back(normals_[f]);
+    }
+  }
+  normals_ = std::move(fine);
+  normals_.insert(normals_.end(), coarse.begin(), coarse.end());
   const std::size_t k = lights_;
   diffuse_.resize(normals_.size() * k);
   specular_.resize(normals_.size() * k);
@@ -72,11 +77,25 @@ CandidateTable::CandidateTable(const std::vector<Vec3d>& light_dir_cam,
     sums_[3 * c + 1] = ds;
     sums_[3 * c + 2] = ss;
   }
+  const std::size_t lanes = kSearchLanes;
+  const std::size_t blocks = (normals_.size() + lanes - 1) / lanes;
+  diffuse_packed_.assign(blocks * k * lanes, 0.0f);
+  specular_packed_.assign(blocks * k * lanes, 0.0f);
+  for (std::size_t c = 0; c < normals_.size(); ++c) {
+    const std::size_t at = (c / lanes) * k * lanes + c % lanes;
+    for (std::size_t j = 0; j < k; ++j) {
+      diffuse_packed_[at + j * lanes] = diffuse_[c * k + j];
+      specular_packed_[at + j * lanes] = specular_[c * k + j];
+      has_lobe_ = has_lobe_ || specular_[c * k + j] != 0;
+    }
+  }
   if (fold_.size() != k) {
     fold_.clear();
     return;
   }
   const int folds = fold_.empty() ? 0 : 1 + *std::max_element(fold_.begin(), fold_.end());
+  fold_size_.assign(folds, 0);
+  for (const int f : fold_) ++fold_size_[f];
   // Each fold's own lights' sums, then the training lights' as all lights' less those: one pass
   // over the table whatever the number of folds (leave-one-out has K of them).
   fold_sums_.assign(folds, std::vector<double>(sums_.size(), 0.0));
@@ -95,13 +114,48 @@ CandidateTable::CandidateTable(const std::vector<Vec3d>& light_dir_cam,
   }
 }
 
-std::pair<double, double> NormalSearch::Solve(double d, double x, double s, double a, double b,
-                                              const double* fixed_ks) const {
-  if (fixed_ks) return {d > 1e-12 ? std::max(0.0, (a - *fixed_ks * x) / d) : 0.0, *fixed_ks};
-  const internal::CoefficientPair<double> c =
-      ks_prior_ ? internal::NonNegativePair(d, x, s, a, b, prior_weight_, *ks_prior_)
-                : internal::NonNegativePair(d, x, s, a, b);
-  return {c.kd, c.ks};
+void NormalSearch::SolveLanes(const WideLanes& d_in, const WideLanes& x_in, const WideLanes& s_in,
+                              const WideLanes& a_in, const WideLanes& b_in, const double* fixed_ks,
+                              WideLanes* kd_out, WideLanes* ks_out) const {
+  constexpr int W = kSearchLanes;
+  const double* __restrict d = d_in.data();
+  const double* __restrict x = x_in.data();
+  const double* __restrict s_data = s_in.data();
+  const double* __restrict a = a_in.data();
+  const double* __restrict b_data = b_in.data();
+  double* __restrict kd = kd_out->data();
+  double* __restrict ks = ks_out->data();
+  if (fixed_ks) {
+    const double k = *fixed_ks;
+    for (int i = 0; i < W; ++i) {
+      const double v = (a[i] - k * x[i]) / d[i];
+      kd[i] = (d[i] > 1e-12) & (v > 0) ? v : 0.0;
+      ks[i] = k;
+    }
+    return;
+  }
+  // internal::NonNegativePair lane by lane, its branches as selects so that the lanes stay in
+  // vector registers (every lane computes every case; a division by zero is discarded).
+  const double weight = ks_prior_ ? prior_weight_ : 0.0, prior = ks_prior_ ? *ks_prior_ : 0.0;
+  for (int i = 0; i < W; ++i) {
+    const double s = s_data[i] + (weight + internal::kKsRidge);
+    const double bb = b_data[i] + weight * prior;
+    const double det = d[i] * s - x[i] * x[i];
+    const bool conditioned = det > 1e-9 * d[i] * s;
+    const double free_kd = (a[i] * s - bb * x[i]) / det, free_ks = (bb * d[i] - a[i] * x[i]) / det;
+    // Bitwise &: no short-circuit branches.
+    const bool free_ok = conditioned & (d[i] > 1e-12) & (free_kd >= 0) & (free_ks >= 0);
+    const bool diffuse_ok = (d[i] > 1e-12) & (a[i] > 0);
+    const bool specular_ok = (s > 1e-12) & (bb > 0) & conditioned;
+    const double one_kd = a[i] / d[i], one_ks = bb / s;
+    const double gain_d = diffuse_ok ? a[i] * one_kd : 0.0;
+    const double gain_s = specular_ok ? bb * one_ks : 0.0;
+    const bool specular_wins = gain_s > gain_d;
+    const double single_kd = diffuse_ok & !specular_wins ? one_kd : 0.0;
+    const double single_ks = specular_ok & specular_wins ? one_ks : 0.0;
+    kd[i] = free_ok ? free_kd : single_kd;
+    ks[i] = free_ok ? free_ks : single_ks;
+  }
 }
 
 NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optional<double> ks_prior,
@@ -112,125 +166,260 @@ NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optiona
       prior_weight_(prior_weight) {
   y_.resize(table.lights());
   usable_.resize(table.lights());
-  weight_.resize(table.lights());
-  next_weight_.resize(table.lights());
-  scores_.reserve(table.size());
+  lit_.reserve(table.lights());
+  keep_ = std::max(refine_, kCoarseTop);
+  scores_.reserve(keep_);
 }
 
-double NormalSearch::Cost(int c, double t, double kd, double ks) const {
-  const int k = table_.lights();
-  const VecF d(table_.diffuse(c), k), s(table_.specular(c), k), y(y_.data(), k),
-      u(usable_.data(), k);
-  // One fused expression: no temporary array per candidate.
-  return ((y.array() - static_cast<float>(kd) * d.array() - static_cast<float>(ks) * s.array())
-              .max(static_cast<float>(-t))
-              .square() *
-          u.array())
-      .sum();
+void NormalSearch::ScoreRange(int begin, int end, double t, const double* fixed_ks) {
+  int lanes[kSearchLanes];
+  for (int block = begin / kSearchLanes; block * kSearchLanes < end; ++block) {
+    const int first = std::max(begin, block * kSearchLanes);
+    const int last = std::min(end, (block + 1) * kSearchLanes);
+    // Lanes before `first` hold candidates outside the range: scored, not reported.
+    const int offset = first - block * kSearchLanes;
+    for (int i = 0; i < kSearchLanes; ++i) lanes[i] = i < offset ? -1 : block * kSearchLanes + i;
+    ScoreBlock(table_.diffuse_block(block), table_.specular_block(block), lanes,
+               last - block * kSearchLanes, t, fixed_ks);
+  }
 }
 
-bool NormalSearch::Refit(int c, double t, const double* fixed_ks, int round, double* kd, double* ks,
-                         double* cost) {
-  const int k = table_.lights();
-  const VecF d(table_.diffuse(c), k), s(table_.specular(c), k), y(y_.data(), k);
-  // The censoring's weights into the member buffers (no allocation per candidate). A plain loop:
-  // Eigen evaluates a comparison cast to float one value at a time, the compiler vectorizes this.
-  const float fkd = static_cast<float>(*kd), fks = static_cast<float>(*ks);
+void NormalSearch::PackNear() {
+  constexpr std::size_t W = kSearchLanes;
+  const std::size_t k = table_.lights();
+  near_.clear();
+  for (const int c : last_coarse_) {
+    const std::vector<int>& members = table_.members(c);
+    near_.insert(near_.end(), members.begin(), members.end());
+  }
+  const std::size_t blocks = (near_.size() + W - 1) / W;
+  near_diffuse_.assign(blocks * k * W, 0.0f);
+  near_specular_.assign(blocks * k * W, 0.0f);
+  for (std::size_t i = 0; i < near_.size(); ++i) {
+    const float *d = table_.diffuse(near_[i]), *s = table_.specular(near_[i]);
+    const std::size_t at = (i / W) * k * W + i % W;
+    for (std::size_t j = 0; j < k; ++j) {
+      near_diffuse_[at + j * W] = d[j];
+      near_specular_[at + j * W] = s[j];
+    }
+  }
+}
+
+void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const int* candidates,
+                              int count, double t, const double* fixed_ks) {
+  constexpr int W = kSearchLanes;
+  using Lanes = Eigen::Array<float, W, 1>;
+  using Row = Eigen::Map<const Lanes, Eigen::Aligned16>;
+  const bool lobe = table_.has_lobe();
+  // Σ_j y_j d_j and Σ_j y_j s_j over the usable lights, in lanes across the block's candidates
+  // (Eigen's fixed-size arrays: packet arithmetic), and where the sums cannot come from the
+  // table, Σ d², Σ d s, Σ s² too — in double, as the table's own are: the 2 × 2 system's.
+  Lanes a = Lanes::Zero(), b = Lanes::Zero();
+  using Wide = Eigen::Array<double, W, 1>;
+  Wide dd = Wide::Zero(), dx = Wide::Zero(), ss = Wide::Zero();
+  for (const int j : lit_) a += y_[j] * Row(diffuse + j * W);
+  if (lobe) {
+    for (const int j : lit_) b += y_[j] * Row(specular + j * W);
+  }
+  if (!from_table_) {
+    for (const int j : lit_) {
+      const Wide d = Row(diffuse + j * W).cast<double>(), s = Row(specular + j * W).cast<double>();
+      dd += d * d, dx += d * s, ss += s * s;
+    }
+  }
+  if (from_table_) {
+    for (int i = 0; i < count; ++i) {
+      const int c = candidates[i];
+      if (c < 0) continue;
+      const double* sums = table_.base_sums(base_, c);
+      double sd = sums[0], sx = sums[1], sss = sums[2];
+      const float *dc = table_.diffuse(c), *sc = table_.specular(c);
+      for (const int j : excluded_) {
+        const double dj = dc[j], sj = sc[j];
+        sd -= dj * dj, sx -= dj * sj, sss -= sj * sj;
+      }
+      dd[i] = sd, dx[i] = sx, ss[i] = sss;
+    }
+  }
+  Wide kd, ks;
+  SolveLanes(dd, dx, ss, a.cast<double>(), b.cast<double>(), fixed_ks, &kd, &ks);
+  const Lanes fkd = kd.cast<float>(), fks = ks.cast<float>();
+  // The censored cost Σ_j max(y_j − kd d_j − ks s_j, −t)² over the usable lights, and by how
+  // much the censoring clips (positive where it censors anything).
+  Lanes cost = Lanes::Zero(), clipped = Lanes::Zero();
   const float floor = static_cast<float>(-t);
-  for (int j = 0; j < k; ++j) {
-    const float r = y_[j] - fkd * d[j] - fks * s[j];
-    next_weight_[j] = r >= floor ? usable_[j] : 0.0f;
+  for (const int j : lit_) {
+    Lanes r = y_[j] - fkd * Row(diffuse + j * W);
+    if (lobe) r -= fks * Row(specular + j * W);
+    clipped += (floor - r).max(0.0f);
+    cost += r.max(floor).square();
   }
-  // The same observations censored as in this candidate's last round: the same fit. (Weights
-  // are exactly 0 or 1, so their bytes compare.)
-  if (round > 0 && std::memcmp(next_weight_.data(), weight_.data(), k * sizeof(float)) == 0) {
-    return false;
+  // Only the best `keep_` scored so far are kept (no candidate past them can reach the refits or
+  // the coarse step's 12), in a heap with the worst on top.
+  const bool full = static_cast<int>(scores_.size()) >= keep_;
+  const float worst = full ? static_cast<float>(scores_.front().cost) : INFINITY;
+  if (full && !(cost < worst).any()) return;
+  for (int i = 0; i < count; ++i) {
+    if (candidates[i] < 0) continue;
+    const Scored scored{cost[i], candidates[i], kd[i], ks[i], clipped[i] > 0};
+    if (static_cast<int>(scores_.size()) < keep_) {
+      scores_.push_back(scored);
+      std::push_heap(scores_.begin(), scores_.end());
+    } else if (scored.cost < scores_.front().cost) {
+      std::pop_heap(scores_.begin(), scores_.end());
+      scores_.back() = scored;
+      std::push_heap(scores_.begin(), scores_.end());
+    }
   }
-  std::swap(weight_, next_weight_);
-  const Eigen::Map<const Eigen::ArrayXf> w(weight_.data(), k);
-  const auto wd = w * d.array();
-  const auto ws = w * s.array();
-  const auto [new_kd, new_ks] =
-      Solve((wd * d.array()).sum(), (wd * s.array()).sum(), (ws * s.array()).sum(),
-            (wd * y.array()).sum(), (ws * y.array()).sum(), fixed_ks);
-  *kd = new_kd;
-  *ks = new_ks;
-  *cost = Cost(c, t, new_kd, new_ks);
-  return true;
+}
+
+void NormalSearch::RefitBlock(const int* which, int count, double t, const double* fixed_ks) {
+  constexpr int W = kSearchLanes;
+  using Lanes = Eigen::Array<float, W, 1>;
+  using Row = Eigen::Map<const Lanes, Eigen::Aligned16>;
+  using Wide = WideLanes;
+  const std::size_t k = table_.lights();
+  // The candidates' factors packed as a block (lanes past `count` zero: nothing fits there).
+  refit_diffuse_.assign(k * W, 0.0f);
+  refit_specular_.assign(k * W, 0.0f);
+  Wide kd0 = Wide::Zero(), ks0 = Wide::Zero();
+  for (int i = 0; i < count; ++i) {
+    const Scored& s = scores_[which[i]];
+    const float *d = table_.diffuse(s.candidate), *sp = table_.specular(s.candidate);
+    for (std::size_t j = 0; j < k; ++j) {
+      refit_diffuse_[j * W + i] = d[j];
+      refit_specular_[j * W + i] = sp[j];
+    }
+    kd0[i] = s.kd, ks0[i] = s.ks;
+  }
+  const float* diffuse = refit_diffuse_.data();
+  const float* specular = refit_specular_.data();
+  const float floor = static_cast<float>(-t);
+  // Σ w d², Σ w d s, Σ w s², Σ w d y, Σ w s y with w the censoring's weights at (kd, ks), each
+  // light's weights kept in `weights` (K × W) to tell whether the next round censors the same.
+  struct Sums {
+    Lanes dd = Lanes::Zero(), dx = Lanes::Zero(), ss = Lanes::Zero(), a = Lanes::Zero(),
+          b = Lanes::Zero();
+  };
+  const auto weighted = [&](const Lanes& kd, const Lanes& ks, float* weights, Sums* sums,
+                            Lanes* cost, Lanes* changed) {
+    for (const int j : lit_) {
+      const Row d(diffuse + j * W), s(specular + j * W);
+      const Lanes r = y_[j] - kd * d - ks * s;
+      const Lanes w = (r >= floor).select(Lanes::Ones(), Lanes::Zero());
+      if (cost) *cost += r.max(floor).square();
+      if (changed)
+        *changed += (w - Eigen::Map<const Lanes, Eigen::Aligned16>(weights + j * W)).abs();
+      Eigen::Map<Lanes, Eigen::Aligned16>(weights + j * W) = w;
+      const Lanes wd = w * d, ws = w * s;
+      sums->dd += wd * d, sums->dx += wd * s, sums->ss += ws * s;
+      sums->a += wd * y_[j], sums->b += ws * y_[j];
+    }
+  };
+  refit_weights_.assign(k * W, 0.0f);
+  // Round 0: the screening fit's weights, and the fit they give.
+  Sums first;
+  weighted(kd0.cast<float>(), ks0.cast<float>(), refit_weights_.data(), &first, nullptr, nullptr);
+  Wide kd1, ks1;
+  SolveLanes(first.dd.cast<double>(), first.dx.cast<double>(), first.ss.cast<double>(),
+             first.a.cast<double>(), first.b.cast<double>(), fixed_ks, &kd1, &ks1);
+  // Its cost, and round 1's weights and sums from its residuals in the same pass.
+  Sums second;
+  Lanes cost1 = Lanes::Zero(), changed = Lanes::Zero();
+  const Lanes fkd1 = kd1.cast<float>(), fks1 = ks1.cast<float>();
+  weighted(fkd1, fks1, refit_weights_.data(), &second, &cost1, &changed);
+  // Round 1 where it censors differently from round 0: the fit with its weights, and its cost.
+  Wide kd2 = kd1, ks2 = ks1;
+  Lanes cost2 = cost1;
+  if ((changed > 0.0f).any()) {
+    SolveLanes(second.dd.cast<double>(), second.dx.cast<double>(), second.ss.cast<double>(),
+               second.a.cast<double>(), second.b.cast<double>(), fixed_ks, &kd2, &ks2);
+    const Lanes fkd2 = kd2.cast<float>(), fks2 = ks2.cast<float>();
+    cost2 = Lanes::Zero();
+    for (const int j : lit_) {
+      const Lanes r = y_[j] - fkd2 * Row(diffuse + j * W) - fks2 * Row(specular + j * W);
+      cost2 += r.max(floor).square();
+    }
+  }
+  for (int i = 0; i < count; ++i) {
+    Scored& s = scores_[which[i]];
+    const bool again = changed[i] > 0;
+    s.kd = again ? kd2[i] : kd1[i];
+    s.ks = again ? ks2[i] : ks1[i];
+    s.cost = again ? cost2[i] : cost1[i];
+  }
 }
 
 SearchResult NormalSearch::Search(const double* y, const double* usable, double t,
                                   const double* fixed_ks, bool near_last) {
   const int k = table_.lights();
+  const std::vector<int>& fold = table_.fold();
+  const int folds = table_.folds();
+  lit_.clear();
+  fold_unusable_.assign(folds, 0);
+  int unusable = 0;
   for (int j = 0; j < k; ++j) {
     y_[j] = static_cast<float>(y[j]);
     usable_[j] = usable[j] != 0 ? 1.0f : 0.0f;
+    if (usable_[j] != 0) {
+      lit_.push_back(j);
+    } else {
+      ++unusable;
+      if (folds > 0) ++fold_unusable_[fold[j]];
+    }
   }
   // The sums Σ d², Σ d s, Σ s² over the usable lights: the table's over every light or over a
-  // fold's training lights — whichever holds them all and the fewest others — less those few
-  // others' terms (saturated observations, mostly); summed directly only when more than a
-  // quarter of the base would be left out.
-  const std::vector<int>& fold = table_.fold();
-  int base = -1;
-  std::size_t fewest = static_cast<std::size_t>(k) + 1;
-  for (int b = -1; b < table_.folds(); ++b) {
-    std::size_t left_out = 0;
-    bool holds = true;
-    for (int j = 0; j < k && holds; ++j) {
-      const bool in_base = b < 0 || fold[j] != b;
-      holds = in_base || usable_[j] == 0;
-      left_out += in_base && usable_[j] == 0;
+  // fold's training lights — whichever holds them all and the fewest others (a fold's base holds
+  // them when every light of the fold is unusable) — less those few others' terms (saturated
+  // observations, mostly); summed directly only when more than a quarter of the base would be
+  // left out.
+  base_ = -1;
+  int fewest = unusable;
+  for (int f = 0; f < folds; ++f) {
+    if (fold_unusable_[f] == table_.fold_size(f) && unusable - table_.fold_size(f) < fewest) {
+      base_ = f;
+      fewest = unusable - table_.fold_size(f);
     }
-    if (holds && left_out < fewest) base = b, fewest = left_out;
   }
-  const bool from_table = 4 * fewest <= static_cast<std::size_t>(k);
+  from_table_ = 4 * fewest <= k;
   excluded_.clear();
-  for (int j = 0; j < k && from_table; ++j) {
-    if ((base < 0 || fold[j] != base) && usable_[j] == 0) excluded_.push_back(j);
+  for (int j = 0; j < k && from_table_; ++j) {
+    if ((base_ < 0 || fold[j] != base_) && usable_[j] == 0) excluded_.push_back(j);
   }
-  const VecF yv(y_.data(), k), u(usable_.data(), k);
-  const Eigen::VectorXf yu = yv.cwiseProduct(u);
-  const auto score = [&](int c) {
-    const VecF d(table_.diffuse(c), k), s(table_.specular(c), k);
-    double sd, sx, sss;
-    if (from_table) {
-      const double* sums = table_.base_sums(base, c);
-      sd = sums[0], sx = sums[1], sss = sums[2];
-      for (const int j : excluded_) {
-        const double dj = d[j], sj = s[j];
-        sd -= dj * dj, sx -= dj * sj, sss -= sj * sj;
-      }
-    } else {
-      sd = d.cwiseProduct(u).dot(d), sx = d.cwiseProduct(u).dot(s), sss = s.cwiseProduct(u).dot(s);
-    }
-    const auto [kd, ks] = Solve(sd, sx, sss, d.dot(yu), s.dot(yu), fixed_ks);
-    return Scored{Cost(c, t, kd, ks), c, kd, ks};
-  };
   scores_.clear();
   if (!near_last) {
-    for (int c = table_.fine_count(); c < table_.size(); ++c) scores_.push_back(score(c));
-    const int coarse_top = std::min<int>(12, static_cast<int>(scores_.size()));
-    // The best 12, in order: selection then a sort of those few (a heap over all was 5 % of a run).
-    std::nth_element(scores_.begin(), scores_.begin() + coarse_top - 1, scores_.end());
-    std::sort(scores_.begin(), scores_.begin() + coarse_top);
+    ScoreRange(table_.fine_count(), table_.size(), t, fixed_ks);
+    const int coarse_top = std::min<int>(kCoarseTop, static_cast<int>(scores_.size()));
+    // The best 12 in order (of the best `keep_` kept), then the heap again.
+    std::sort(scores_.begin(), scores_.end());
     last_coarse_.clear();
     for (int i = 0; i < coarse_top; ++i) last_coarse_.push_back(scores_[i].candidate);
+    std::make_heap(scores_.begin(), scores_.end());
+    near_.clear();
   }
-  for (int c : last_coarse_) {
-    for (int f : table_.members(c)) scores_.push_back(score(f));
+  if (near_.empty()) PackNear();
+  const std::size_t block = static_cast<std::size_t>(k) * kSearchLanes;
+  for (std::size_t i = 0; i < near_.size(); i += kSearchLanes) {
+    ScoreBlock(near_diffuse_.data() + (i / kSearchLanes) * block,
+               near_specular_.data() + (i / kSearchLanes) * block, near_.data() + i,
+               static_cast<int>(std::min<std::size_t>(kSearchLanes, near_.size() - i)), t,
+               fixed_ks);
   }
   const int top = std::min<int>(refine_, static_cast<int>(scores_.size()));
-  if (top > 0) {
-    std::nth_element(scores_.begin(), scores_.begin() + top - 1, scores_.end());
-    std::sort(scores_.begin(), scores_.begin() + top);
-  }
+  std::sort(scores_.begin(), scores_.end());
+  refit_.clear();
   for (int i = 0; i < top; ++i) {
     Scored& s = scores_[i];
     // From the screening's least-squares coefficients, two rounds of the censoring's weights
-    // (the second only when the first changed which observations are censored).
-    for (int round = 0; round < 2; ++round) {
-      if (!Refit(s.candidate, t, fixed_ks, round, &s.kd, &s.ks, &s.cost)) break;
-    }
+    // (the second only when the first changed which observations are censored). Where the
+    // screening's fit censors nothing, the first round's weights are the usable lights: its fit
+    // is the screening's own, and nothing would change.
+    if (s.censors) refit_.push_back(i);
+  }
+  for (std::size_t i = 0; i < refit_.size(); i += kSearchLanes) {
+    RefitBlock(refit_.data() + i,
+               static_cast<int>(std::min<std::size_t>(kSearchLanes, refit_.size() - i)), t,
+               fixed_ks);
   }
   // Insertion sort: stable (ties keep their screening order), and no buffer per search as
   // std::stable_sort takes; `top` is at most `refine` (16).

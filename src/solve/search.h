@@ -4,14 +4,19 @@
 // Woodham's, pulled by highlights and shadows — can then leave a pixel in a wrong basin.
 //
 // For a candidate N the model's factors d_j = max(N·L_j, 0) and s_j = lobe_j(N)
-// (reflectance/phong.h) are the same for every pixel: they are tabulated once, C × K. A pixel's
+// (reflectance/phong.h) are the same for every pixel: they are tabulated once, C × K, and again
+// packed in blocks of kSearchLanes candidates, light-major within a block (K × kSearchLanes), so
+// that a pixel scores a block's candidates together, a light at a time, in vector lanes (the
+// products Σ_j y_j d_j and Σ_j y_j s_j are a matrix–vector product, the censored cost a fused
+// pass of the same shape, and both skip the lights the pixel cannot use). A pixel's
 // luminance observations y_j = lum((I_j − Ia⊙ka)/E_j) are fitted at each candidate as
 //   y_j ≈ kd·d_j + ks·s_j,   kd, ks ≥ 0 (ks given when the coefficients are known),
 // the two coefficients by least squares (internal::NonNegativePair), and the candidate is scored
 // by the censored cost Σ_j max(y_j − kd d_j − ks s_j, −t)² (internal::CensoredCost). Coarse to
 // fine: a quarter as many coarse directions are scored first; the fine directions nearest to the
-// best 12 of them are scored next. The best `refine` of all scored are then refitted with the
-// censoring's weights (two rounds), as the local fit would, and the lowest censored cost wins.
+// best 12 of them (stored contiguously) are scored next. The best `refine` of all scored are then
+// refitted with the censoring's weights (two rounds), as the local fit would, and the lowest
+// censored cost wins; a candidate whose least-squares fit censors nothing is already that fit.
 // Camera frame, V = (0, 0, 1).
 #pragma once
 
@@ -29,6 +34,9 @@ namespace iphong::solve {
 // areas, spacing about sqrt(2π/count) radians.
 std::vector<Vec3d> HemisphereDirections(int count);
 
+// Candidates scored together (CandidateTable's packed blocks): two SSE registers of floats.
+constexpr int kSearchLanes = 8;
+
 // Candidates 0 … fine_count() − 1 are the fine directions, the rest the coarse ones.
 class CandidateTable {
  public:
@@ -38,7 +46,8 @@ class CandidateTable {
                  double shininess, int count, const std::vector<int>& fold = {});
   int size() const { return static_cast<int>(normals_.size()); }
   int fine_count() const { return fine_; }
-  // The fine candidates whose nearest coarse direction is coarse candidate c.
+  // The fine candidates whose nearest coarse direction is coarse candidate c: a contiguous range
+  // of indices (the fine directions are stored grouped by their coarse one).
   const std::vector<int>& members(int c) const { return members_[c - fine_]; }
   int lights() const { return lights_; }
   const Vec3d& normal(int c) const { return normals_[c]; }
@@ -48,6 +57,16 @@ class CandidateTable {
   const float* specular(int c) const {
     return specular_.data() + static_cast<std::size_t>(c) * lights_;
   }
+  // Block b's factors (candidates kSearchLanes·b …, zero past size()): light j's at
+  // [j·kSearchLanes, (j + 1)·kSearchLanes).
+  const float* diffuse_block(int b) const {
+    return diffuse_packed_.data() + static_cast<std::size_t>(b) * lights_ * kSearchLanes;
+  }
+  const float* specular_block(int b) const {
+    return specular_packed_.data() + static_cast<std::size_t>(b) * lights_ * kSearchLanes;
+  }
+  // Whether any candidate's lobe is nonzero under any light (false for Lambert).
+  bool has_lobe() const { return has_lobe_; }
   // The folds given (empty: none), and {Σ d², Σ d s, Σ s²} of candidate c over every light
   // (base −1: the sums of a pixel with no saturated image) or over those outside fold `base`.
   const std::vector<int>& fold() const { return fold_; }
@@ -55,15 +74,19 @@ class CandidateTable {
   const double* base_sums(int base, int c) const {
     return (base < 0 ? sums_.data() : fold_sums_[base].data()) + 3 * static_cast<std::size_t>(c);
   }
+  // The number of lights in fold f.
+  int fold_size(int f) const { return fold_size_[f]; }
 
  private:
   int lights_ = 0;
   int fine_ = 0;
   std::vector<int> fold_;
+  std::vector<int> fold_size_;
   std::vector<std::vector<double>> fold_sums_;
   std::vector<Vec3d> normals_;
   std::vector<std::vector<int>> members_;
-  std::vector<float> diffuse_, specular_;
+  std::vector<float> diffuse_, specular_, diffuse_packed_, specular_packed_;
+  bool has_lobe_ = false;
   std::vector<double> sums_;
 };
 
@@ -98,32 +121,59 @@ class NormalSearch {
                       bool near_last = false);
   // The coarse directions the next `near_last` search looks near: those of `other`'s last full
   // search (a table over the same directions).
-  void NearTheLastOf(const NormalSearch& other) { last_coarse_ = other.last_coarse_; }
+  void NearTheLastOf(const NormalSearch& other) {
+    last_coarse_ = other.last_coarse_;
+    near_.clear();
+  }
 
  private:
-  // Refits candidate c's coefficients with the censoring weights of (kd, ks), in place, and
-  // sets the censored cost of the result; false (nothing changed) when a round after the first
-  // censors what the one before it did.
-  bool Refit(int c, double t, const double* fixed_ks, int round, double* kd, double* ks,
-             double* cost);
-  // (kd, ks) from the weighted sums (internal::NonNegativePair, or kd alone for a fixed ks).
-  std::pair<double, double> Solve(double d, double x, double s, double a, double b,
-                                  const double* fixed_ks) const;
-  double Cost(int c, double t, double kd, double ks) const;
+  // (kd, ks) from the weighted sums D = Σ w d², X = Σ w d s, S = Σ w s², A = Σ w d y, B = Σ w s y
+  // of kSearchLanes candidates at once, one per lane: internal::NonNegativePair (with the ks
+  // prior), or kd alone for a fixed ks.
+  using WideLanes = Eigen::Array<double, kSearchLanes, 1>;
+  void SolveLanes(const WideLanes& d, const WideLanes& x, const WideLanes& s, const WideLanes& a,
+                  const WideLanes& b, const double* fixed_ks, WideLanes* kd, WideLanes* ks) const;
+  // Scores candidates [begin, end) — the least-squares coefficients on the usable lights and the
+  // censored cost there — and appends them to scores_, a packed block at a time.
+  void ScoreRange(int begin, int end, double t, const double* fixed_ks);
+  // Scores the candidates of one packed block (K × kSearchLanes factors), lane i holding
+  // candidate candidates[i] for i < count.
+  void ScoreBlock(const float* diffuse, const float* specular, const int* candidates, int count,
+                  double t, const double* fixed_ks);
+  // Refits the candidates scores_[which[0 … count − 1]] (at most kSearchLanes) together: from
+  // the screening's coefficients, the fit with the censoring's weights, and again where that
+  // fit censors other observations than the screening's did (two rounds).
+  void RefitBlock(const int* which, int count, double t, const double* fixed_ks);
+  // Packs the fine candidates near last_coarse_ (their members) into near_*: the same few are
+  // scored by every search near the last full one (a pixel's held-out folds, both models).
+  void PackNear();
   const CandidateTable& table_;
   int refine_;
   std::optional<double> ks_prior_;
   double prior_weight_ = 0;
-  std::vector<float> y_, usable_, weight_, next_weight_;
+  std::vector<float> y_, usable_;
   struct Scored {
     double cost;
     int candidate;
     double kd, ks;  // the least-squares coefficients the cost was taken at
+    bool censors;   // whether any usable observation lies more than t below that fit
     bool operator<(const Scored& o) const { return cost < o.cost; }
   };
+  // The best candidates scored so far, at most keep_ (refine_, and the coarse step's 12), a heap
+  // with the worst on top until they are sorted.
+  static constexpr int kCoarseTop = 12;
   std::vector<Scored> scores_;
+  int keep_ = 16;
   std::vector<int> last_coarse_;
+  std::vector<int> near_;  // the candidates packed in near_diffuse_/near_specular_ (empty: none)
+  std::vector<float> near_diffuse_, near_specular_;
+  std::vector<int> refit_;  // the scores_ to refit
+  std::vector<float> refit_diffuse_, refit_specular_, refit_weights_;
   std::vector<int> excluded_;  // lights of the sums' base that the search leaves out
+  std::vector<int> lit_;       // the usable lights
+  int base_ = -1;              // the sums' base (CandidateTable::base_sums)
+  bool from_table_ = true;     // sums from the base less excluded_, else summed directly
+  std::vector<int> fold_unusable_;
 };
 
 // What a held-out fit does after the search on a fold's training lights: by default nothing (the
