@@ -205,6 +205,19 @@ void NormalSearch::PackNear() {
   }
 }
 
+bool NormalSearch::DarkNearTheLast(int j) {
+  if (near_.empty()) PackNear();
+  if (near_.empty()) return false;
+  const std::size_t k = table_.lights();
+  for (std::size_t i = 0; i < near_.size(); i += kSearchLanes) {
+    const std::size_t at = (i / kSearchLanes) * k * kSearchLanes + j * kSearchLanes;
+    for (int l = 0; l < kSearchLanes; ++l) {
+      if (near_diffuse_[at + l] != 0 || near_specular_[at + l] != 0) return false;
+    }
+  }
+  return true;
+}
+
 void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const int* candidates,
                               int count, double t, const double* fixed_ks) {
   constexpr int W = kSearchLanes;
@@ -479,9 +492,19 @@ HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, c
                             std::vector<double>& buffer, bool near_last, HeldOutRefiner* refiner,
                             double* per_light) {
   SearchResult r;
+  bool dark = false;  // the fold's usable lights reach no candidate near the last search
+  const int k = table.lights();
   return FoldLoop(
-      table.lights(), y, usable, fold, t, buffer, per_light, false,
+      k, y, usable, fold, t, buffer, per_light, false,
       [&](const double* training, Vec3d* normal) {
+        dark = near_last && !refiner;
+        for (int j = 0; j < k && dark; ++j) {
+          if (training[j] == 0 && usable[j] != 0) dark = search.DarkNearTheLast(j);
+        }
+        if (dark) {
+          *normal = Vec3d::Zero();
+          return true;
+        }
         r = search.Search(y, training, t, nullptr, near_last);
         if (r.candidate < 0) return false;
         *normal = refiner ? refiner->Refine(table.normal(r.candidate), training)
@@ -489,6 +512,7 @@ HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, c
         return true;
       },
       [&](int j) {
+        if (dark) return 0.0;
         return refiner
                    ? refiner->Predicted(j)
                    : r.kd * table.diffuse(r.candidate)[j] + r.ks * table.specular(r.candidate)[j];

@@ -121,6 +121,9 @@ class NormalSearch {
                       bool near_last = false);
   // The coarse directions the next `near_last` search looks near: those of `other`'s last full
   // search (a table over the same directions).
+  // Whether light j sends nothing (d_j = s_j = 0) to every candidate a `near_last` search scores:
+  // its prediction is then 0 whichever of them wins.
+  bool DarkNearTheLast(int j);
   void NearTheLastOf(const NormalSearch& other) {
     last_coarse_ = other.last_coarse_;
     near_.clear();
@@ -196,7 +199,9 @@ struct HeldOutResult {
   double cost = 0;
   Vec3d normal[2] = {Vec3d::Zero(), Vec3d::Zero()};
 };
-// `near_last`: the halves searched near the last full search of `search` (NormalSearch::Search).
+// `near_last`: the halves searched near the last full search of `search` (NormalSearch::Search);
+// a fold none of whose usable lights reaches any candidate there (NormalSearch::DarkNearTheLast)
+// is then not searched, for it predicts 0 whichever candidate wins (its normal is left zero).
 // `per_light` (K, or nullptr): each light's own held-out cost, 0 where it is not usable, for a
 // paired comparison of two models on the same lights (PairedDifference).
 HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, const double* y,
