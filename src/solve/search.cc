@@ -3,10 +3,59 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "solve/internal.h"
 
 namespace iphong::solve {
+
+void internal::NonNegativePairLanes(const double* d, const double* x, const double* s_data,
+                                    const double* a, const double* b_data, int n,
+                                    double prior_weight, double prior_ks, double* kd, double* ks) {
+  int i = 0;
+#if defined(__SSE2__)
+  // Every lane computes every case (a division by zero in a lane is discarded by its select).
+  const __m128d zero = _mm_setzero_pd(), tiny = _mm_set1_pd(1e-12), eps = _mm_set1_pd(1e-9);
+  const __m128d weight = _mm_set1_pd(prior_weight), ridge = _mm_set1_pd(kKsRidge);
+  const __m128d pull = _mm_set1_pd(prior_weight * prior_ks);
+  const auto select = [](__m128d mask, __m128d yes, __m128d no) {
+    return _mm_or_pd(_mm_and_pd(mask, yes), _mm_andnot_pd(mask, no));
+  };
+  for (; i + 2 <= n; i += 2) {
+    const __m128d dv = _mm_loadu_pd(d + i), xv = _mm_loadu_pd(x + i), av = _mm_loadu_pd(a + i);
+    const __m128d sv = _mm_add_pd(_mm_add_pd(_mm_loadu_pd(s_data + i), weight), ridge);
+    const __m128d bv = _mm_add_pd(_mm_loadu_pd(b_data + i), pull);
+    const __m128d det = _mm_sub_pd(_mm_mul_pd(dv, sv), _mm_mul_pd(xv, xv));
+    const __m128d conditioned = _mm_cmpgt_pd(det, _mm_mul_pd(_mm_mul_pd(eps, dv), sv));
+    const __m128d d_ok = _mm_cmpgt_pd(dv, tiny);
+    const __m128d free_kd = _mm_div_pd(_mm_sub_pd(_mm_mul_pd(av, sv), _mm_mul_pd(bv, xv)), det);
+    const __m128d free_ks = _mm_div_pd(_mm_sub_pd(_mm_mul_pd(bv, dv), _mm_mul_pd(av, xv)), det);
+    const __m128d free_ok =
+        _mm_and_pd(_mm_and_pd(conditioned, d_ok),
+                   _mm_and_pd(_mm_cmpge_pd(free_kd, zero), _mm_cmpge_pd(free_ks, zero)));
+    const __m128d diffuse_ok = _mm_and_pd(d_ok, _mm_cmpgt_pd(av, zero));
+    const __m128d specular_ok =
+        _mm_and_pd(_mm_and_pd(_mm_cmpgt_pd(sv, tiny), _mm_cmpgt_pd(bv, zero)), conditioned);
+    const __m128d gain_d = _mm_and_pd(diffuse_ok, _mm_div_pd(_mm_mul_pd(av, av), dv));
+    const __m128d gain_s = _mm_and_pd(specular_ok, _mm_div_pd(_mm_mul_pd(bv, bv), sv));
+    const __m128d specular_wins = _mm_cmpgt_pd(gain_s, gain_d);
+    const __m128d single_kd =
+        _mm_and_pd(_mm_andnot_pd(specular_wins, diffuse_ok), _mm_div_pd(av, dv));
+    const __m128d single_ks =
+        _mm_and_pd(_mm_and_pd(specular_ok, specular_wins), _mm_div_pd(bv, sv));
+    _mm_storeu_pd(kd + i, select(free_ok, free_kd, single_kd));
+    _mm_storeu_pd(ks + i, select(free_ok, free_ks, single_ks));
+  }
+#endif
+  for (; i < n; ++i) {
+    const CoefficientPair<double> c =
+        NonNegativePair(d[i], x[i], s_data[i], a[i], b_data[i], prior_weight, prior_ks);
+    kd[i] = c.kd;
+    ks[i] = c.ks;
+  }
+}
 
 std::vector<Vec3d> HemisphereDirections(int count) {
   std::vector<Vec3d> out;
@@ -134,28 +183,8 @@ void NormalSearch::SolveLanes(const WideLanes& d_in, const WideLanes& x_in, cons
     }
     return;
   }
-  // internal::NonNegativePair lane by lane, its branches as selects so that the lanes stay in
-  // vector registers (every lane computes every case; a division by zero is discarded).
-  const double weight = ks_prior_ ? prior_weight_ : 0.0, prior = ks_prior_ ? *ks_prior_ : 0.0;
-  for (int i = 0; i < W; ++i) {
-    const double s = s_data[i] + (weight + internal::kKsRidge);
-    const double bb = b_data[i] + weight * prior;
-    const double det = d[i] * s - x[i] * x[i];
-    const bool conditioned = det > 1e-9 * d[i] * s;
-    const double free_kd = (a[i] * s - bb * x[i]) / det, free_ks = (bb * d[i] - a[i] * x[i]) / det;
-    // Bitwise &: no short-circuit branches.
-    const bool free_ok = conditioned & (d[i] > 1e-12) & (free_kd >= 0) & (free_ks >= 0);
-    const bool diffuse_ok = (d[i] > 1e-12) & (a[i] > 0);
-    const bool specular_ok = (s > 1e-12) & (bb > 0) & conditioned;
-    const double one_kd = a[i] / d[i], one_ks = bb / s;
-    const double gain_d = diffuse_ok ? a[i] * one_kd : 0.0;
-    const double gain_s = specular_ok ? bb * one_ks : 0.0;
-    const bool specular_wins = gain_s > gain_d;
-    const double single_kd = diffuse_ok & !specular_wins ? one_kd : 0.0;
-    const double single_ks = specular_ok & specular_wins ? one_ks : 0.0;
-    kd[i] = free_ok ? free_kd : single_kd;
-    ks[i] = free_ok ? free_ks : single_ks;
-  }
+  internal::NonNegativePairLanes(d, x, s_data, a, b_data, W, ks_prior_ ? prior_weight_ : 0.0,
+                                 ks_prior_ ? *ks_prior_ : 0.0, kd, ks);
 }
 
 NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optional<double> ks_prior,
@@ -169,11 +198,14 @@ NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optiona
   lit_.reserve(table.lights());
   keep_ = std::max(refine_, kCoarseTop);
   scores_.reserve(keep_);
+  heap_.reserve(keep_);
 }
 
 void NormalSearch::ScoreRange(int begin, int end, double t, const double* fixed_ks) {
   int lanes[kSearchLanes];
-  for (int block = begin / kSearchLanes; block * kSearchLanes < end; ++block) {
+  // From the last block down: the spiral's directions rise toward the camera with their index,
+  // and most surfaces face it, so the best few are met early and the kept set seldom changes.
+  for (int block = (end - 1) / kSearchLanes; block >= begin / kSearchLanes; --block) {
     const int first = std::max(begin, block * kSearchLanes);
     const int last = std::min(end, (block + 1) * kSearchLanes);
     // Lanes before `first` hold candidates outside the range: scored, not reported.
@@ -270,18 +302,20 @@ void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const
   // Only the best `keep_` scored so far are kept (no candidate past them can reach the refits or
   // the coarse step's 12), in a heap with the worst on top.
   const bool full = static_cast<int>(scores_.size()) >= keep_;
-  const float worst = full ? static_cast<float>(scores_.front().cost) : INFINITY;
+  const float worst = full ? heap_.front().cost : INFINITY;
   if (full && !(cost < worst).any()) return;
   for (int i = 0; i < count; ++i) {
     if (candidates[i] < 0) continue;
     const Scored scored{cost[i], candidates[i], kd[i], ks[i], clipped[i] > 0};
     if (static_cast<int>(scores_.size()) < keep_) {
+      heap_.push_back({cost[i], static_cast<int>(scores_.size())});
       scores_.push_back(scored);
-      std::push_heap(scores_.begin(), scores_.end());
-    } else if (scored.cost < scores_.front().cost) {
-      std::pop_heap(scores_.begin(), scores_.end());
-      scores_.back() = scored;
-      std::push_heap(scores_.begin(), scores_.end());
+      std::push_heap(heap_.begin(), heap_.end());
+    } else if (cost[i] < heap_.front().cost) {
+      std::pop_heap(heap_.begin(), heap_.end());
+      scores_[heap_.back().slot] = scored;
+      heap_.back().cost = cost[i];
+      std::push_heap(heap_.begin(), heap_.end());
     }
   }
 }
@@ -400,6 +434,7 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
     if ((base_ < 0 || fold[j] != base_) && usable_[j] == 0) excluded_.push_back(j);
   }
   scores_.clear();
+  heap_.clear();
   if (!near_last) {
     ScoreRange(table_.fine_count(), table_.size(), t, fixed_ks);
     const int coarse_top = std::min<int>(kCoarseTop, static_cast<int>(scores_.size()));
@@ -407,7 +442,10 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
     std::sort(scores_.begin(), scores_.end());
     last_coarse_.clear();
     for (int i = 0; i < coarse_top; ++i) last_coarse_.push_back(scores_[i].candidate);
-    std::make_heap(scores_.begin(), scores_.end());
+    for (std::size_t i = 0; i < scores_.size(); ++i) {
+      heap_[i] = {static_cast<float>(scores_[i].cost), static_cast<int>(i)};
+    }
+    std::make_heap(heap_.begin(), heap_.end());
     near_.clear();
   }
   if (near_.empty()) PackNear();

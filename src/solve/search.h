@@ -162,10 +162,16 @@ class NormalSearch {
     bool censors;   // whether any usable observation lies more than t below that fit
     bool operator<(const Scored& o) const { return cost < o.cost; }
   };
-  // The best candidates scored so far, at most keep_ (refine_, and the coarse step's 12), a heap
-  // with the worst on top until they are sorted.
+  // The best candidates scored so far, at most keep_ (refine_, and the coarse step's 12), and a
+  // heap of their costs with the worst on top (small entries: what a replacement moves).
   static constexpr int kCoarseTop = 12;
+  struct Slot {
+    float cost;
+    int slot;  // in scores_
+    bool operator<(const Slot& o) const { return cost < o.cost; }
+  };
   std::vector<Scored> scores_;
+  std::vector<Slot> heap_;
   int keep_ = 16;
   std::vector<int> last_coarse_;
   std::vector<int> near_;  // the candidates packed in near_diffuse_/near_specular_ (empty: none)

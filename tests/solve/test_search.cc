@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <random>
 
 #include "solve/internal.h"
 #include "solve/metrics.h"
@@ -76,6 +78,49 @@ TEST(Normals, SearchSumsFromFoldTablesEqualDirectSums) {
     }
   }
   EXPECT_GT(compared, 1000);
+}
+
+// The search solves eight candidates' 2 × 2 systems at once (internal::NonNegativePairLanes, SSE2
+// selects); each lane must be bitwise what the scalar NonNegativePair gives, in every branch: the
+// free solution, either single coefficient, neither, an ill-conditioned system, zero sums, with
+// and without the ks prior.
+TEST(Normals, LaneSolveEqualsScalarSolveBitwise) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const auto pick = [&](int kind) {
+    switch (kind) {
+      case 0:
+        return 0.0;
+      case 1:
+        return 1e-13;
+      default:
+        return std::ldexp(u(rng), static_cast<int>(u(rng) * 8));
+    }
+  };
+  int branches[4] = {0, 0, 0, 0};  // free, kd alone, ks alone, neither
+  for (int trial = 0; trial < 20000; ++trial) {
+    double d[8], x[8], s[8], a[8], b[8], kd[8], ks[8];
+    for (int i = 0; i < 8; ++i) {
+      d[i] = std::abs(pick(rng() % 12));
+      s[i] = std::abs(pick(rng() % 12));
+      // |x| up to sqrt(d s), sometimes at it (a singular system).
+      x[i] = (rng() % 5 == 0 ? 1.0 : std::abs(u(rng))) * std::sqrt(d[i] * s[i]);
+      a[i] = pick(rng() % 12);
+      b[i] = pick(rng() % 12);
+    }
+    const double weight = trial % 3 == 0 ? 1.0 : 0.0, prior = trial % 3 == 0 ? 0.3 : 0.0;
+    internal::NonNegativePairLanes(d, x, s, a, b, 8, weight, prior, kd, ks);
+    for (int i = 0; i < 8; ++i) {
+      const internal::CoefficientPair<double> c =
+          internal::NonNegativePair(d[i], x[i], s[i], a[i], b[i], weight, prior);
+      ASSERT_EQ(std::memcmp(&kd[i], &c.kd, sizeof(double)), 0)
+          << "kd " << kd[i] << " vs " << c.kd << " (d " << d[i] << " x " << x[i] << " s " << s[i]
+          << " a " << a[i] << " b " << b[i] << ")";
+      ASSERT_EQ(std::memcmp(&ks[i], &c.ks, sizeof(double)), 0) << "ks " << ks[i] << " vs " << c.ks;
+      ++branches[c.kd > 0 && c.ks > 0 ? 0 : c.kd > 0 ? 1 : c.ks > 0 ? 2 : 3];
+    }
+  }
+  for (int n : branches) EXPECT_GT(n, 1000);
 }
 
 // Each fine candidate of the search's table belongs to its nearest coarse direction, exactly as
