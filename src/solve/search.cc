@@ -8,8 +8,11 @@
 #endif
 
 #include "solve/internal.h"
+#include "solve/search_lanes.h"
 
 namespace iphong::solve {
+
+static_assert(kSearchLanes == internal::kLanes, "the packed blocks are the lane kernels' width");
 
 void internal::NonNegativePairLanes(const double* d, const double* x, const double* s_data,
                                     const double* a, const double* b_data, int n,
@@ -257,15 +260,13 @@ void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const
   using Row = Eigen::Map<const Lanes, Eigen::Aligned16>;
   const bool lobe = table_.has_lobe();
   // Σ_j y_j d_j and Σ_j y_j s_j over the usable lights, in lanes across the block's candidates
-  // (Eigen's fixed-size arrays: packet arithmetic), and where the sums cannot come from the
-  // table, Σ d², Σ d s, Σ s² too — in double, as the table's own are: the 2 × 2 system's.
+  // (search_lanes.h), and where the sums cannot come from the table, Σ d², Σ d s, Σ s² too — in
+  // double, as the table's own are: the 2 × 2 system's.
+  const int lit = static_cast<int>(lit_.size());
   Lanes a = Lanes::Zero(), b = Lanes::Zero();
+  internal::ProductLanes(diffuse, specular, lobe, lit_.data(), lit, y_.data(), a.data(), b.data());
   using Wide = Eigen::Array<double, W, 1>;
   Wide dd = Wide::Zero(), dx = Wide::Zero(), ss = Wide::Zero();
-  for (const int j : lit_) a += y_[j] * Row(diffuse + j * W);
-  if (lobe) {
-    for (const int j : lit_) b += y_[j] * Row(specular + j * W);
-  }
   if (!from_table_) {
     for (const int j : lit_) {
       const Wide d = Row(diffuse + j * W).cast<double>(), s = Row(specular + j * W).cast<double>();
@@ -291,14 +292,9 @@ void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const
   const Lanes fkd = kd.cast<float>(), fks = ks.cast<float>();
   // The censored cost Σ_j max(y_j − kd d_j − ks s_j, −t)² over the usable lights, and by how
   // much the censoring clips (positive where it censors anything).
-  Lanes cost = Lanes::Zero(), clipped = Lanes::Zero();
-  const float floor = static_cast<float>(-t);
-  for (const int j : lit_) {
-    Lanes r = y_[j] - fkd * Row(diffuse + j * W);
-    if (lobe) r -= fks * Row(specular + j * W);
-    clipped += (floor - r).max(0.0f);
-    cost += r.max(floor).square();
-  }
+  Lanes cost, clipped;
+  internal::CostLanes(diffuse, specular, lobe, lit_.data(), lit, y_.data(), fkd.data(), fks.data(),
+                      static_cast<float>(-t), cost.data(), clipped.data());
   // Only the best `keep_` scored so far are kept (no candidate past them can reach the refits or
   // the coarse step's 12), in a heap with the worst on top.
   const bool full = static_cast<int>(scores_.size()) >= keep_;
@@ -323,7 +319,6 @@ void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const
 void NormalSearch::RefitBlock(const int* which, int count, double t, const double* fixed_ks) {
   constexpr int W = kSearchLanes;
   using Lanes = Eigen::Array<float, W, 1>;
-  using Row = Eigen::Map<const Lanes, Eigen::Aligned16>;
   using Wide = WideLanes;
   const std::size_t k = table_.lights();
   // The candidates' factors packed as a block (lanes past `count` zero: nothing fits there).
@@ -342,51 +337,39 @@ void NormalSearch::RefitBlock(const int* which, int count, double t, const doubl
   const float* diffuse = refit_diffuse_.data();
   const float* specular = refit_specular_.data();
   const float floor = static_cast<float>(-t);
+  const int lit = static_cast<int>(lit_.size());
   // Σ w d², Σ w d s, Σ w s², Σ w d y, Σ w s y with w the censoring's weights at (kd, ks), each
-  // light's weights kept in `weights` (K × W) to tell whether the next round censors the same.
-  struct Sums {
-    Lanes dd = Lanes::Zero(), dx = Lanes::Zero(), ss = Lanes::Zero(), a = Lanes::Zero(),
-          b = Lanes::Zero();
-  };
-  const auto weighted = [&](const Lanes& kd, const Lanes& ks, float* weights, Sums* sums,
-                            Lanes* cost, Lanes* changed) {
-    for (const int j : lit_) {
-      const Row d(diffuse + j * W), s(specular + j * W);
-      const Lanes r = y_[j] - kd * d - ks * s;
-      const Lanes w = (r >= floor).select(Lanes::Ones(), Lanes::Zero());
-      if (cost) *cost += r.max(floor).square();
-      if (changed)
-        *changed += (w - Eigen::Map<const Lanes, Eigen::Aligned16>(weights + j * W)).abs();
-      Eigen::Map<Lanes, Eigen::Aligned16>(weights + j * W) = w;
-      const Lanes wd = w * d, ws = w * s;
-      sums->dd += wd * d, sums->dx += wd * s, sums->ss += ws * s;
-      sums->a += wd * y_[j], sums->b += ws * y_[j];
-    }
+  // light's weights kept in refit_weights_ (K × W) to tell whether the next round censors the same
+  // (internal::WeightedSumsLanes).
+  using Sums = Eigen::Array<float, W, 5>;
+  const auto solve = [&](const Sums& sums, Wide* kd, Wide* ks) {
+    SolveLanes(sums.col(0).cast<double>(), sums.col(1).cast<double>(), sums.col(2).cast<double>(),
+               sums.col(3).cast<double>(), sums.col(4).cast<double>(), fixed_ks, kd, ks);
   };
   refit_weights_.assign(k * W, 0.0f);
   // Round 0: the screening fit's weights, and the fit they give.
-  Sums first;
-  weighted(kd0.cast<float>(), ks0.cast<float>(), refit_weights_.data(), &first, nullptr, nullptr);
+  Sums first, second;
+  Lanes cost1, changed, unused_cost, unused_changed;
+  const Lanes fkd0 = kd0.cast<float>(), fks0 = ks0.cast<float>();
+  internal::WeightedSumsLanes(diffuse, specular, lit_.data(), lit, y_.data(), fkd0.data(),
+                              fks0.data(), floor, refit_weights_.data(), first.data(),
+                              unused_cost.data(), unused_changed.data());
   Wide kd1, ks1;
-  SolveLanes(first.dd.cast<double>(), first.dx.cast<double>(), first.ss.cast<double>(),
-             first.a.cast<double>(), first.b.cast<double>(), fixed_ks, &kd1, &ks1);
+  solve(first, &kd1, &ks1);
   // Its cost, and round 1's weights and sums from its residuals in the same pass.
-  Sums second;
-  Lanes cost1 = Lanes::Zero(), changed = Lanes::Zero();
   const Lanes fkd1 = kd1.cast<float>(), fks1 = ks1.cast<float>();
-  weighted(fkd1, fks1, refit_weights_.data(), &second, &cost1, &changed);
+  internal::WeightedSumsLanes(diffuse, specular, lit_.data(), lit, y_.data(), fkd1.data(),
+                              fks1.data(), floor, refit_weights_.data(), second.data(),
+                              cost1.data(), changed.data());
   // Round 1 where it censors differently from round 0: the fit with its weights, and its cost.
   Wide kd2 = kd1, ks2 = ks1;
   Lanes cost2 = cost1;
   if ((changed > 0.0f).any()) {
-    SolveLanes(second.dd.cast<double>(), second.dx.cast<double>(), second.ss.cast<double>(),
-               second.a.cast<double>(), second.b.cast<double>(), fixed_ks, &kd2, &ks2);
+    solve(second, &kd2, &ks2);
     const Lanes fkd2 = kd2.cast<float>(), fks2 = ks2.cast<float>();
-    cost2 = Lanes::Zero();
-    for (const int j : lit_) {
-      const Lanes r = y_[j] - fkd2 * Row(diffuse + j * W) - fks2 * Row(specular + j * W);
-      cost2 += r.max(floor).square();
-    }
+    Lanes clipped;
+    internal::CostLanes(diffuse, specular, true, lit_.data(), lit, y_.data(), fkd2.data(),
+                        fks2.data(), floor, cost2.data(), clipped.data());
   }
   for (int i = 0; i < count; ++i) {
     Scored& s = scores_[which[i]];

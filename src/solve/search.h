@@ -34,7 +34,8 @@ namespace iphong::solve {
 // areas, spacing about sqrt(2π/count) radians.
 std::vector<Vec3d> HemisphereDirections(int count);
 
-// Candidates scored together (CandidateTable's packed blocks): two SSE registers of floats.
+// Candidates scored together (CandidateTable's packed blocks): an AVX register of floats, or two
+// SSE ones (solve/search_lanes.h).
 constexpr int kSearchLanes = 8;
 
 // Candidates 0 … fine_count() − 1 are the fine directions, the rest the coarse ones.

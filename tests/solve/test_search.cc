@@ -11,6 +11,7 @@
 #include "solve/metrics.h"
 #include "solve/normals.h"
 #include "solve/search.h"
+#include "solve/search_lanes.h"
 #include "synthetic_spheres.h"
 
 namespace iphong::solve {
@@ -121,6 +122,91 @@ TEST(Normals, LaneSolveEqualsScalarSolveBitwise) {
     }
   }
   for (int n : branches) EXPECT_GT(n, 1000);
+}
+
+// The search's lane kernels (search_lanes.h) against a plain loop over lanes and lights doing the
+// same float operations in the same order: bitwise equal, for the baseline build and, where the
+// processor has it, the AVX2 one (which the search then runs).
+TEST(Normals, LaneKernelsEqualAPlainLoopBitwise) {
+  constexpr int W = internal::kLanes, K = 23;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0, 1);
+  std::vector<float> d(K * W), s(K * W), y(K), kd(W), ks(W);
+  std::vector<int> lit;
+  for (int j = 0; j < K; ++j) {
+    if (j % 5 != 3) lit.push_back(j);  // some lights unusable
+    y[j] = j % 7 == 0 ? 0.0f : u(rng);
+    for (int i = 0; i < W; ++i) {
+      d[j * W + i] = (i + j) % 4 == 0 ? 0.0f : u(rng);
+      s[j * W + i] = (i * j) % 3 == 0 ? 0.0f : u(rng) * u(rng);
+    }
+  }
+  for (int i = 0; i < W; ++i) kd[i] = u(rng), ks[i] = u(rng) * 0.5f;
+  const float floor = -0.1f;
+  const int n = static_cast<int>(lit.size());
+  // The reference, lane by lane.
+  float a_ref[W] = {}, b_ref[W] = {}, cost_ref[W] = {}, clipped_ref[W] = {}, sums_ref[5 * W] = {};
+  std::vector<float> weights_ref(K * W, 0.5f);  // "before": every weight changes
+  float changed_ref[W] = {};
+  for (int i = 0; i < W; ++i) {
+    for (const int j : lit) {
+      a_ref[i] += y[j] * d[j * W + i];
+      b_ref[i] += y[j] * s[j * W + i];
+      const float r = y[j] - kd[i] * d[j * W + i] - ks[i] * s[j * W + i];
+      clipped_ref[i] += floor - r > 0 ? floor - r : 0.0f;
+      const float kept = r > floor ? r : floor;
+      cost_ref[i] += kept * kept;
+      const float w = r >= floor ? 1.0f : 0.0f;
+      const float change = w - weights_ref[j * W + i];
+      changed_ref[i] += change > 0 ? change : -change;
+      weights_ref[j * W + i] = w;
+      const float wd = w * d[j * W + i], ws = w * s[j * W + i];
+      sums_ref[i] += wd * d[j * W + i];
+      sums_ref[W + i] += wd * s[j * W + i];
+      sums_ref[2 * W + i] += ws * s[j * W + i];
+      sums_ref[3 * W + i] += wd * y[j];
+      sums_ref[4 * W + i] += ws * y[j];
+    }
+  }
+  using Product =
+      void (*)(const float*, const float*, bool, const int*, int, const float*, float*, float*);
+  using Cost = void (*)(const float*, const float*, bool, const int*, int, const float*,
+                        const float*, const float*, float, float*, float*);
+  using Sums = void (*)(const float*, const float*, const int*, int, const float*, const float*,
+                        const float*, float, float*, float*, float*, float*);
+  struct Variant {
+    const char* name;
+    Product product;
+    Cost cost;
+    Sums sums;
+  };
+  std::vector<Variant> variants = {{"baseline", internal::ProductLanesBaseline,
+                                    internal::CostLanesBaseline,
+                                    internal::WeightedSumsLanesBaseline}};
+#if IPHONG_LANES_AVX2
+  if (internal::LanesUseAvx2()) {
+    variants.push_back({"avx2", internal::ProductLanesAvx2, internal::CostLanesAvx2,
+                        internal::WeightedSumsLanesAvx2});
+  }
+#endif
+  const auto same = [](const float* x, const float* y, int count) {
+    return std::memcmp(x, y, count * sizeof(float)) == 0;
+  };
+  for (const Variant& v : variants) {
+    float a[W], b[W], cost[W], clipped[W], sums[5 * W], changed[W];
+    v.product(d.data(), s.data(), true, lit.data(), n, y.data(), a, b);
+    EXPECT_TRUE(same(a, a_ref, W) && same(b, b_ref, W)) << v.name;
+    v.cost(d.data(), s.data(), true, lit.data(), n, y.data(), kd.data(), ks.data(), floor, cost,
+           clipped);
+    EXPECT_TRUE(same(cost, cost_ref, W) && same(clipped, clipped_ref, W)) << v.name;
+    std::vector<float> weights(K * W, 0.5f);
+    v.sums(d.data(), s.data(), lit.data(), n, y.data(), kd.data(), ks.data(), floor, weights.data(),
+           sums, cost, changed);
+    EXPECT_TRUE(same(sums, sums_ref, 5 * W)) << v.name;
+    EXPECT_TRUE(same(cost, cost_ref, W) && same(changed, changed_ref, W)) << v.name;
+    EXPECT_TRUE(same(weights.data(), weights_ref.data(), K * W)) << v.name;
+  }
+  RecordProperty("variants", static_cast<int>(variants.size()));
 }
 
 // Each fine candidate of the search's table belongs to its nearest coarse direction, exactly as
