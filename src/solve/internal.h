@@ -69,13 +69,6 @@ CoefficientPair<T> NonNegativePair(const T& d, const T& x, const T& s_data, cons
   return c;
 }
 
-// NonNegativePair for n systems at once (lane i: d[i], x[i], …), the same operations in the same
-// order, so each lane's answer is bitwise the scalar one; its branches become selects, two lanes
-// to an SSE2 register (solve/search.cc, where the search solves eight candidates at a time).
-void NonNegativePairLanes(const double* d, const double* x, const double* s, const double* a,
-                          const double* b, int n, double prior_weight, double prior_ks, double* kd,
-                          double* ks);
-
 // The coefficients minimizing Σ_j w_j (y_jc − kd_c·d_j − ks_c·s_j)² for each of `channels` (≤ 3)
 // channels, all ≥ 0: the variable-projection step of every fit. With `fixed_ks` (known
 // coefficients) only kd_c = (A_c − ks_c X)/D is solved, clamped at 0; otherwise both per channel

@@ -3,9 +3,6 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 #include "solve/internal.h"
 #include "solve/search_lanes.h"
@@ -13,52 +10,6 @@
 namespace iphong::solve {
 
 static_assert(kSearchLanes == internal::kLanes, "the packed blocks are the lane kernels' width");
-
-void internal::NonNegativePairLanes(const double* d, const double* x, const double* s_data,
-                                    const double* a, const double* b_data, int n,
-                                    double prior_weight, double prior_ks, double* kd, double* ks) {
-  int i = 0;
-#if defined(__SSE2__)
-  // Every lane computes every case (a division by zero in a lane is discarded by its select).
-  const __m128d zero = _mm_setzero_pd(), tiny = _mm_set1_pd(1e-12), eps = _mm_set1_pd(1e-9);
-  const __m128d weight = _mm_set1_pd(prior_weight), ridge = _mm_set1_pd(kKsRidge);
-  const __m128d pull = _mm_set1_pd(prior_weight * prior_ks);
-  const auto select = [](__m128d mask, __m128d yes, __m128d no) {
-    return _mm_or_pd(_mm_and_pd(mask, yes), _mm_andnot_pd(mask, no));
-  };
-  for (; i + 2 <= n; i += 2) {
-    const __m128d dv = _mm_loadu_pd(d + i), xv = _mm_loadu_pd(x + i), av = _mm_loadu_pd(a + i);
-    const __m128d sv = _mm_add_pd(_mm_add_pd(_mm_loadu_pd(s_data + i), weight), ridge);
-    const __m128d bv = _mm_add_pd(_mm_loadu_pd(b_data + i), pull);
-    const __m128d det = _mm_sub_pd(_mm_mul_pd(dv, sv), _mm_mul_pd(xv, xv));
-    const __m128d conditioned = _mm_cmpgt_pd(det, _mm_mul_pd(_mm_mul_pd(eps, dv), sv));
-    const __m128d d_ok = _mm_cmpgt_pd(dv, tiny);
-    const __m128d free_kd = _mm_div_pd(_mm_sub_pd(_mm_mul_pd(av, sv), _mm_mul_pd(bv, xv)), det);
-    const __m128d free_ks = _mm_div_pd(_mm_sub_pd(_mm_mul_pd(bv, dv), _mm_mul_pd(av, xv)), det);
-    const __m128d free_ok =
-        _mm_and_pd(_mm_and_pd(conditioned, d_ok),
-                   _mm_and_pd(_mm_cmpge_pd(free_kd, zero), _mm_cmpge_pd(free_ks, zero)));
-    const __m128d diffuse_ok = _mm_and_pd(d_ok, _mm_cmpgt_pd(av, zero));
-    const __m128d specular_ok =
-        _mm_and_pd(_mm_and_pd(_mm_cmpgt_pd(sv, tiny), _mm_cmpgt_pd(bv, zero)), conditioned);
-    const __m128d gain_d = _mm_and_pd(diffuse_ok, _mm_div_pd(_mm_mul_pd(av, av), dv));
-    const __m128d gain_s = _mm_and_pd(specular_ok, _mm_div_pd(_mm_mul_pd(bv, bv), sv));
-    const __m128d specular_wins = _mm_cmpgt_pd(gain_s, gain_d);
-    const __m128d single_kd =
-        _mm_and_pd(_mm_andnot_pd(specular_wins, diffuse_ok), _mm_div_pd(av, dv));
-    const __m128d single_ks =
-        _mm_and_pd(_mm_and_pd(specular_ok, specular_wins), _mm_div_pd(bv, sv));
-    _mm_storeu_pd(kd + i, select(free_ok, free_kd, single_kd));
-    _mm_storeu_pd(ks + i, select(free_ok, free_ks, single_ks));
-  }
-#endif
-  for (; i < n; ++i) {
-    const CoefficientPair<double> c =
-        NonNegativePair(d[i], x[i], s_data[i], a[i], b_data[i], prior_weight, prior_ks);
-    kd[i] = c.kd;
-    ks[i] = c.ks;
-  }
-}
 
 std::vector<Vec3d> HemisphereDirections(int count) {
   std::vector<Vec3d> out;
@@ -166,28 +117,22 @@ CandidateTable::CandidateTable(const std::vector<Vec3d>& light_dir_cam,
   }
 }
 
-void NormalSearch::SolveLanes(const WideLanes& d_in, const WideLanes& x_in, const WideLanes& s_in,
-                              const WideLanes& a_in, const WideLanes& b_in, const double* fixed_ks,
-                              WideLanes* kd_out, WideLanes* ks_out) const {
-  constexpr int W = kSearchLanes;
-  const double* __restrict d = d_in.data();
-  const double* __restrict x = x_in.data();
-  const double* __restrict s_data = s_in.data();
-  const double* __restrict a = a_in.data();
-  const double* __restrict b_data = b_in.data();
-  double* __restrict kd = kd_out->data();
-  double* __restrict ks = ks_out->data();
-  if (fixed_ks) {
-    const double k = *fixed_ks;
-    for (int i = 0; i < W; ++i) {
-      const double v = (a[i] - k * x[i]) / d[i];
-      kd[i] = (d[i] > 1e-12) & (v > 0) ? v : 0.0;
-      ks[i] = k;
+void NormalSearch::SolveLanes(const WideLanes& d, const WideLanes& x, const WideLanes& s,
+                              const WideLanes& a, const WideLanes& b, const double* fixed_ks,
+                              WideLanes* kd, WideLanes* ks) const {
+  for (int i = 0; i < kSearchLanes; ++i) {
+    if (fixed_ks) {
+      (*kd)[i] = d[i] > 1e-12 ? std::max(0.0, (a[i] - *fixed_ks * x[i]) / d[i]) : 0.0;
+      (*ks)[i] = *fixed_ks;
+      continue;
     }
-    return;
+    const internal::CoefficientPair<double> c =
+        ks_prior_
+            ? internal::NonNegativePair(d[i], x[i], s[i], a[i], b[i], prior_weight_, *ks_prior_)
+            : internal::NonNegativePair(d[i], x[i], s[i], a[i], b[i]);
+    (*kd)[i] = c.kd;
+    (*ks)[i] = c.ks;
   }
-  internal::NonNegativePairLanes(d, x, s_data, a, b_data, W, ks_prior_ ? prior_weight_ : 0.0,
-                                 ks_prior_ ? *ks_prior_ : 0.0, kd, ks);
 }
 
 NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optional<double> ks_prior,
@@ -240,19 +185,6 @@ void NormalSearch::PackNear() {
   }
 }
 
-bool NormalSearch::DarkNearTheLast(int j) {
-  if (near_.empty()) PackNear();
-  if (near_.empty()) return false;
-  const std::size_t k = table_.lights();
-  for (std::size_t i = 0; i < near_.size(); i += kSearchLanes) {
-    const std::size_t at = (i / kSearchLanes) * k * kSearchLanes + j * kSearchLanes;
-    for (int l = 0; l < kSearchLanes; ++l) {
-      if (near_diffuse_[at + l] != 0 || near_specular_[at + l] != 0) return false;
-    }
-  }
-  return true;
-}
-
 void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const int* candidates,
                               int count, double t, const double* fixed_ks) {
   constexpr int W = kSearchLanes;
@@ -264,28 +196,24 @@ void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const
   // double, as the table's own are: the 2 × 2 system's.
   const int lit = static_cast<int>(lit_.size());
   Lanes a = Lanes::Zero(), b = Lanes::Zero();
-  internal::ProductLanes(diffuse, specular, lobe, lit_.data(), lit, y_.data(), a.data(), b.data());
-  using Wide = Eigen::Array<double, W, 1>;
+  internal::SearchLaneKernels().product(diffuse, specular, lobe, lit_.data(), lit, y_.data(),
+                                        a.data(), b.data());
+  using Wide = WideLanes;
   Wide dd = Wide::Zero(), dx = Wide::Zero(), ss = Wide::Zero();
-  if (!from_table_) {
-    for (const int j : lit_) {
-      const Wide d = Row(diffuse + j * W).cast<double>(), s = Row(specular + j * W).cast<double>();
-      dd += d * d, dx += d * s, ss += s * s;
-    }
-  }
+  const auto add = [&](int j, double sign) {
+    const Wide d = Row(diffuse + j * W).cast<double>(), s = Row(specular + j * W).cast<double>();
+    dd += sign * d * d, dx += sign * d * s, ss += sign * s * s;
+  };
   if (from_table_) {
+    // The base's sums less the excluded lights' terms.
     for (int i = 0; i < count; ++i) {
-      const int c = candidates[i];
-      if (c < 0) continue;
-      const double* sums = table_.base_sums(base_, c);
-      double sd = sums[0], sx = sums[1], sss = sums[2];
-      const float *dc = table_.diffuse(c), *sc = table_.specular(c);
-      for (const int j : excluded_) {
-        const double dj = dc[j], sj = sc[j];
-        sd -= dj * dj, sx -= dj * sj, sss -= sj * sj;
-      }
-      dd[i] = sd, dx[i] = sx, ss[i] = sss;
+      if (candidates[i] < 0) continue;
+      const double* sums = table_.base_sums(base_, candidates[i]);
+      dd[i] = sums[0], dx[i] = sums[1], ss[i] = sums[2];
     }
+    for (const int j : excluded_) add(j, -1);
+  } else {
+    for (const int j : lit_) add(j, 1);
   }
   Wide kd, ks;
   SolveLanes(dd, dx, ss, a.cast<double>(), b.cast<double>(), fixed_ks, &kd, &ks);
@@ -293,8 +221,9 @@ void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const
   // The censored cost Σ_j max(y_j − kd d_j − ks s_j, −t)² over the usable lights, and by how
   // much the censoring clips (positive where it censors anything).
   Lanes cost, clipped;
-  internal::CostLanes(diffuse, specular, lobe, lit_.data(), lit, y_.data(), fkd.data(), fks.data(),
-                      static_cast<float>(-t), cost.data(), clipped.data());
+  internal::SearchLaneKernels().cost(diffuse, specular, lobe, lit_.data(), lit, y_.data(),
+                                     fkd.data(), fks.data(), static_cast<float>(-t), cost.data(),
+                                     clipped.data());
   // Only the best `keep_` scored so far are kept (no candidate past them can reach the refits or
   // the coarse step's 12), in a heap with the worst on top.
   const bool full = static_cast<int>(scores_.size()) >= keep_;
@@ -340,7 +269,7 @@ void NormalSearch::RefitBlock(const int* which, int count, double t, const doubl
   const int lit = static_cast<int>(lit_.size());
   // Σ w d², Σ w d s, Σ w s², Σ w d y, Σ w s y with w the censoring's weights at (kd, ks), each
   // light's weights kept in refit_weights_ (K × W) to tell whether the next round censors the same
-  // (internal::WeightedSumsLanes).
+  // (search_lanes.h).
   using Sums = Eigen::Array<float, W, 5>;
   const auto solve = [&](const Sums& sums, Wide* kd, Wide* ks) {
     SolveLanes(sums.col(0).cast<double>(), sums.col(1).cast<double>(), sums.col(2).cast<double>(),
@@ -349,18 +278,18 @@ void NormalSearch::RefitBlock(const int* which, int count, double t, const doubl
   refit_weights_.assign(k * W, 0.0f);
   // Round 0: the screening fit's weights, and the fit they give.
   Sums first, second;
-  Lanes cost1, changed, unused_cost, unused_changed;
+  Lanes cost1, changed;
   const Lanes fkd0 = kd0.cast<float>(), fks0 = ks0.cast<float>();
-  internal::WeightedSumsLanes(diffuse, specular, lit_.data(), lit, y_.data(), fkd0.data(),
-                              fks0.data(), floor, refit_weights_.data(), first.data(),
-                              unused_cost.data(), unused_changed.data());
+  internal::SearchLaneKernels().weighted_sums(
+      diffuse, specular, lit_.data(), lit, y_.data(), fkd0.data(), fks0.data(), floor,
+      refit_weights_.data(), first.data(), nullptr, nullptr);
   Wide kd1, ks1;
   solve(first, &kd1, &ks1);
   // Its cost, and round 1's weights and sums from its residuals in the same pass.
   const Lanes fkd1 = kd1.cast<float>(), fks1 = ks1.cast<float>();
-  internal::WeightedSumsLanes(diffuse, specular, lit_.data(), lit, y_.data(), fkd1.data(),
-                              fks1.data(), floor, refit_weights_.data(), second.data(),
-                              cost1.data(), changed.data());
+  internal::SearchLaneKernels().weighted_sums(
+      diffuse, specular, lit_.data(), lit, y_.data(), fkd1.data(), fks1.data(), floor,
+      refit_weights_.data(), second.data(), cost1.data(), changed.data());
   // Round 1 where it censors differently from round 0: the fit with its weights, and its cost.
   Wide kd2 = kd1, ks2 = ks1;
   Lanes cost2 = cost1;
@@ -368,8 +297,9 @@ void NormalSearch::RefitBlock(const int* which, int count, double t, const doubl
     solve(second, &kd2, &ks2);
     const Lanes fkd2 = kd2.cast<float>(), fks2 = ks2.cast<float>();
     Lanes clipped;
-    internal::CostLanes(diffuse, specular, true, lit_.data(), lit, y_.data(), fkd2.data(),
-                        fks2.data(), floor, cost2.data(), clipped.data());
+    internal::SearchLaneKernels().cost(diffuse, specular, true, lit_.data(), lit, y_.data(),
+                                       fkd2.data(), fks2.data(), floor, cost2.data(),
+                                       clipped.data());
   }
   for (int i = 0; i < count; ++i) {
     Scored& s = scores_[which[i]];
@@ -513,19 +443,9 @@ HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, c
                             std::vector<double>& buffer, bool near_last, HeldOutRefiner* refiner,
                             double* per_light) {
   SearchResult r;
-  bool dark = false;  // the fold's usable lights reach no candidate near the last search
-  const int k = table.lights();
   return FoldLoop(
-      k, y, usable, fold, t, buffer, per_light, false,
+      table.lights(), y, usable, fold, t, buffer, per_light, false,
       [&](const double* training, Vec3d* normal) {
-        dark = near_last && !refiner;
-        for (int j = 0; j < k && dark; ++j) {
-          if (training[j] == 0 && usable[j] != 0) dark = search.DarkNearTheLast(j);
-        }
-        if (dark) {
-          *normal = Vec3d::Zero();
-          return true;
-        }
         r = search.Search(y, training, t, nullptr, near_last);
         if (r.candidate < 0) return false;
         *normal = refiner ? refiner->Refine(table.normal(r.candidate), training)
@@ -533,7 +453,6 @@ HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, c
         return true;
       },
       [&](int j) {
-        if (dark) return 0.0;
         return refiner
                    ? refiner->Predicted(j)
                    : r.kd * table.diffuse(r.candidate)[j] + r.ks * table.specular(r.candidate)[j];

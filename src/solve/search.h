@@ -122,9 +122,6 @@ class NormalSearch {
                       bool near_last = false);
   // The coarse directions the next `near_last` search looks near: those of `other`'s last full
   // search (a table over the same directions).
-  // Whether light j sends nothing (d_j = s_j = 0) to every candidate a `near_last` search scores:
-  // its prediction is then 0 whichever of them wins.
-  bool DarkNearTheLast(int j);
   void NearTheLastOf(const NormalSearch& other) {
     last_coarse_ = other.last_coarse_;
     near_.clear();
@@ -132,8 +129,8 @@ class NormalSearch {
 
  private:
   // (kd, ks) from the weighted sums D = Σ w d², X = Σ w d s, S = Σ w s², A = Σ w d y, B = Σ w s y
-  // of kSearchLanes candidates at once, one per lane: internal::NonNegativePair (with the ks
-  // prior), or kd alone for a fixed ks.
+  // of kSearchLanes candidates, one per lane: internal::NonNegativePair (with the ks prior), or
+  // kd alone for a fixed ks.
   using WideLanes = Eigen::Array<double, kSearchLanes, 1>;
   void SolveLanes(const WideLanes& d, const WideLanes& x, const WideLanes& s, const WideLanes& a,
                   const WideLanes& b, const double* fixed_ks, WideLanes* kd, WideLanes* ks) const;
@@ -206,9 +203,7 @@ struct HeldOutResult {
   double cost = 0;
   Vec3d normal[2] = {Vec3d::Zero(), Vec3d::Zero()};
 };
-// `near_last`: the halves searched near the last full search of `search` (NormalSearch::Search);
-// a fold none of whose usable lights reaches any candidate there (NormalSearch::DarkNearTheLast)
-// is then not searched, for it predicts 0 whichever candidate wins (its normal is left zero).
+// `near_last`: the halves searched near the last full search of `search` (NormalSearch::Search).
 // `per_light` (K, or nullptr): each light's own held-out cost, 0 where it is not usable, for a
 // paired comparison of two models on the same lights (PairedDifference).
 HeldOutResult HeldOutSearch(NormalSearch& search, const CandidateTable& table, const double* y,

@@ -94,83 +94,67 @@ IPHONG_LANE_BODY void WeightedSumsBody(const float* diffuse, const float* specul
   if (changed_out) Store(changed_out, changed);
 }
 
-// The baseline's and AVX2's compilations of each body, and the dispatch between them.
-void ProductLanesBaseline(const float* diffuse, const float* specular, bool lobe, const int* lit,
-                          int n, const float* y, float* a, float* b) {
+namespace {
+
+// Each body compiled for the baseline and, on x86-64, for AVX2 (the target attribute compiles the
+// inlined body for it).
+void ProductBaseline(const float* diffuse, const float* specular, bool lobe, const int* lit, int n,
+                     const float* y, float* a, float* b) {
   ProductBody(diffuse, specular, lobe, lit, n, y, a, b);
 }
-void CostLanesBaseline(const float* diffuse, const float* specular, bool lobe, const int* lit,
-                       int n, const float* y, const float* kd, const float* ks, float floor,
-                       float* cost, float* clipped) {
+void CostBaseline(const float* diffuse, const float* specular, bool lobe, const int* lit, int n,
+                  const float* y, const float* kd, const float* ks, float floor, float* cost,
+                  float* clipped) {
   CostBody(diffuse, specular, lobe, lit, n, y, kd, ks, floor, cost, clipped);
 }
-void WeightedSumsLanesBaseline(const float* diffuse, const float* specular, const int* lit, int n,
-                               const float* y, const float* kd, const float* ks, float floor,
-                               float* weights, float* sums, float* cost, float* changed) {
+void WeightedSumsBaseline(const float* diffuse, const float* specular, const int* lit, int n,
+                          const float* y, const float* kd, const float* ks, float floor,
+                          float* weights, float* sums, float* cost, float* changed) {
   WeightedSumsBody(diffuse, specular, lit, n, y, kd, ks, floor, weights, sums, cost, changed);
 }
 
 #if IPHONG_LANES_AVX2
-__attribute__((target("avx2"))) void ProductLanesAvx2(const float* diffuse, const float* specular,
-                                                      bool lobe, const int* lit, int n,
-                                                      const float* y, float* a, float* b) {
+__attribute__((target("avx2"))) void ProductAvx2(const float* diffuse, const float* specular,
+                                                 bool lobe, const int* lit, int n, const float* y,
+                                                 float* a, float* b) {
   ProductBody(diffuse, specular, lobe, lit, n, y, a, b);
 }
-__attribute__((target("avx2"))) void CostLanesAvx2(const float* diffuse, const float* specular,
-                                                   bool lobe, const int* lit, int n, const float* y,
-                                                   const float* kd, const float* ks, float floor,
-                                                   float* cost, float* clipped) {
+__attribute__((target("avx2"))) void CostAvx2(const float* diffuse, const float* specular,
+                                              bool lobe, const int* lit, int n, const float* y,
+                                              const float* kd, const float* ks, float floor,
+                                              float* cost, float* clipped) {
   CostBody(diffuse, specular, lobe, lit, n, y, kd, ks, floor, cost, clipped);
 }
-__attribute__((target("avx2"))) void WeightedSumsLanesAvx2(const float* diffuse,
-                                                           const float* specular, const int* lit,
-                                                           int n, const float* y, const float* kd,
-                                                           const float* ks, float floor,
-                                                           float* weights, float* sums, float* cost,
-                                                           float* changed) {
+__attribute__((target("avx2"))) void WeightedSumsAvx2(const float* diffuse, const float* specular,
+                                                      const int* lit, int n, const float* y,
+                                                      const float* kd, const float* ks, float floor,
+                                                      float* weights, float* sums, float* cost,
+                                                      float* changed) {
   WeightedSumsBody(diffuse, specular, lit, n, y, kd, ks, floor, weights, sums, cost, changed);
 }
 #endif
 
-bool LanesUseAvx2() {
+}  // namespace
+
+const LaneKernels& BaselineLaneKernels() {
+  static const LaneKernels kernels{"baseline", ProductBaseline, CostBaseline, WeightedSumsBaseline};
+  return kernels;
+}
+
+const LaneKernels* Avx2LaneKernels() {
 #if IPHONG_LANES_AVX2
-  static const bool avx2 = __builtin_cpu_supports("avx2");
-  return avx2;
+  static const LaneKernels kernels{"avx2", ProductAvx2, CostAvx2, WeightedSumsAvx2};
+  static const bool available = __builtin_cpu_supports("avx2");
+  return available ? &kernels : nullptr;
 #else
-  return false;
+  return nullptr;
 #endif
 }
 
-void ProductLanes(const float* diffuse, const float* specular, bool lobe, const int* lit, int n,
-                  const float* y, float* a, float* b) {
-#if IPHONG_LANES_AVX2
-  if (LanesUseAvx2()) return ProductLanesAvx2(diffuse, specular, lobe, lit, n, y, a, b);
-#endif
-  ProductLanesBaseline(diffuse, specular, lobe, lit, n, y, a, b);
-}
-
-void CostLanes(const float* diffuse, const float* specular, bool lobe, const int* lit, int n,
-               const float* y, const float* kd, const float* ks, float floor, float* cost,
-               float* clipped) {
-#if IPHONG_LANES_AVX2
-  if (LanesUseAvx2()) {
-    return CostLanesAvx2(diffuse, specular, lobe, lit, n, y, kd, ks, floor, cost, clipped);
-  }
-#endif
-  CostLanesBaseline(diffuse, specular, lobe, lit, n, y, kd, ks, floor, cost, clipped);
-}
-
-void WeightedSumsLanes(const float* diffuse, const float* specular, const int* lit, int n,
-                       const float* y, const float* kd, const float* ks, float floor,
-                       float* weights, float* sums, float* cost, float* changed) {
-#if IPHONG_LANES_AVX2
-  if (LanesUseAvx2()) {
-    return WeightedSumsLanesAvx2(diffuse, specular, lit, n, y, kd, ks, floor, weights, sums, cost,
-                                 changed);
-  }
-#endif
-  WeightedSumsLanesBaseline(diffuse, specular, lit, n, y, kd, ks, floor, weights, sums, cost,
-                            changed);
+const LaneKernels& SearchLaneKernels() {
+  static const LaneKernels& kernels =
+      Avx2LaneKernels() ? *Avx2LaneKernels() : BaselineLaneKernels();
+  return kernels;
 }
 
 }  // namespace iphong::solve::internal

@@ -81,49 +81,6 @@ TEST(Normals, SearchSumsFromFoldTablesEqualDirectSums) {
   EXPECT_GT(compared, 1000);
 }
 
-// The search solves eight candidates' 2 × 2 systems at once (internal::NonNegativePairLanes, SSE2
-// selects); each lane must be bitwise what the scalar NonNegativePair gives, in every branch: the
-// free solution, either single coefficient, neither, an ill-conditioned system, zero sums, with
-// and without the ks prior.
-TEST(Normals, LaneSolveEqualsScalarSolveBitwise) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-1, 1);
-  const auto pick = [&](int kind) {
-    switch (kind) {
-      case 0:
-        return 0.0;
-      case 1:
-        return 1e-13;
-      default:
-        return std::ldexp(u(rng), static_cast<int>(u(rng) * 8));
-    }
-  };
-  int branches[4] = {0, 0, 0, 0};  // free, kd alone, ks alone, neither
-  for (int trial = 0; trial < 20000; ++trial) {
-    double d[8], x[8], s[8], a[8], b[8], kd[8], ks[8];
-    for (int i = 0; i < 8; ++i) {
-      d[i] = std::abs(pick(rng() % 12));
-      s[i] = std::abs(pick(rng() % 12));
-      // |x| up to sqrt(d s), sometimes at it (a singular system).
-      x[i] = (rng() % 5 == 0 ? 1.0 : std::abs(u(rng))) * std::sqrt(d[i] * s[i]);
-      a[i] = pick(rng() % 12);
-      b[i] = pick(rng() % 12);
-    }
-    const double weight = trial % 3 == 0 ? 1.0 : 0.0, prior = trial % 3 == 0 ? 0.3 : 0.0;
-    internal::NonNegativePairLanes(d, x, s, a, b, 8, weight, prior, kd, ks);
-    for (int i = 0; i < 8; ++i) {
-      const internal::CoefficientPair<double> c =
-          internal::NonNegativePair(d[i], x[i], s[i], a[i], b[i], weight, prior);
-      ASSERT_EQ(std::memcmp(&kd[i], &c.kd, sizeof(double)), 0)
-          << "kd " << kd[i] << " vs " << c.kd << " (d " << d[i] << " x " << x[i] << " s " << s[i]
-          << " a " << a[i] << " b " << b[i] << ")";
-      ASSERT_EQ(std::memcmp(&ks[i], &c.ks, sizeof(double)), 0) << "ks " << ks[i] << " vs " << c.ks;
-      ++branches[c.kd > 0 && c.ks > 0 ? 0 : c.kd > 0 ? 1 : c.ks > 0 ? 2 : 3];
-    }
-  }
-  for (int n : branches) EXPECT_GT(n, 1000);
-}
-
 // The search's lane kernels (search_lanes.h) against a plain loop over lanes and lights doing the
 // same float operations in the same order: bitwise equal, for the baseline build and, where the
 // processor has it, the AVX2 one (which the search then runs).
@@ -168,43 +125,24 @@ TEST(Normals, LaneKernelsEqualAPlainLoopBitwise) {
       sums_ref[4 * W + i] += ws * y[j];
     }
   }
-  using Product =
-      void (*)(const float*, const float*, bool, const int*, int, const float*, float*, float*);
-  using Cost = void (*)(const float*, const float*, bool, const int*, int, const float*,
-                        const float*, const float*, float, float*, float*);
-  using Sums = void (*)(const float*, const float*, const int*, int, const float*, const float*,
-                        const float*, float, float*, float*, float*, float*);
-  struct Variant {
-    const char* name;
-    Product product;
-    Cost cost;
-    Sums sums;
-  };
-  std::vector<Variant> variants = {{"baseline", internal::ProductLanesBaseline,
-                                    internal::CostLanesBaseline,
-                                    internal::WeightedSumsLanesBaseline}};
-#if IPHONG_LANES_AVX2
-  if (internal::LanesUseAvx2()) {
-    variants.push_back({"avx2", internal::ProductLanesAvx2, internal::CostLanesAvx2,
-                        internal::WeightedSumsLanesAvx2});
-  }
-#endif
+  std::vector<const internal::LaneKernels*> variants = {&internal::BaselineLaneKernels()};
+  if (internal::Avx2LaneKernels()) variants.push_back(internal::Avx2LaneKernels());
   const auto same = [](const float* x, const float* y, int count) {
     return std::memcmp(x, y, count * sizeof(float)) == 0;
   };
-  for (const Variant& v : variants) {
+  for (const internal::LaneKernels* v : variants) {
     float a[W], b[W], cost[W], clipped[W], sums[5 * W], changed[W];
-    v.product(d.data(), s.data(), true, lit.data(), n, y.data(), a, b);
-    EXPECT_TRUE(same(a, a_ref, W) && same(b, b_ref, W)) << v.name;
-    v.cost(d.data(), s.data(), true, lit.data(), n, y.data(), kd.data(), ks.data(), floor, cost,
-           clipped);
-    EXPECT_TRUE(same(cost, cost_ref, W) && same(clipped, clipped_ref, W)) << v.name;
+    v->product(d.data(), s.data(), true, lit.data(), n, y.data(), a, b);
+    EXPECT_TRUE(same(a, a_ref, W) && same(b, b_ref, W)) << v->name;
+    v->cost(d.data(), s.data(), true, lit.data(), n, y.data(), kd.data(), ks.data(), floor, cost,
+            clipped);
+    EXPECT_TRUE(same(cost, cost_ref, W) && same(clipped, clipped_ref, W)) << v->name;
     std::vector<float> weights(K * W, 0.5f);
-    v.sums(d.data(), s.data(), lit.data(), n, y.data(), kd.data(), ks.data(), floor, weights.data(),
-           sums, cost, changed);
-    EXPECT_TRUE(same(sums, sums_ref, 5 * W)) << v.name;
-    EXPECT_TRUE(same(cost, cost_ref, W) && same(changed, changed_ref, W)) << v.name;
-    EXPECT_TRUE(same(weights.data(), weights_ref.data(), K * W)) << v.name;
+    v->weighted_sums(d.data(), s.data(), lit.data(), n, y.data(), kd.data(), ks.data(), floor,
+                     weights.data(), sums, cost, changed);
+    EXPECT_TRUE(same(sums, sums_ref, 5 * W)) << v->name;
+    EXPECT_TRUE(same(cost, cost_ref, W) && same(changed, changed_ref, W)) << v->name;
+    EXPECT_TRUE(same(weights.data(), weights_ref.data(), K * W)) << v->name;
   }
   RecordProperty("variants", static_cast<int>(variants.size()));
 }
