@@ -1,5 +1,4 @@
 #include "solve/model_choice.h"
-#include "core/golden_section.h"
 
 #include <algorithm>
 #include <array>
@@ -11,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "core/golden_section.h"
 #include "core/parallel.h"
 #include "solve/heldout_internal.h"
 
