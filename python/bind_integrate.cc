@@ -7,6 +7,7 @@
 #include "arrays.h"
 #include "bindings.h"
 #include "geometry/height_map.h"
+#include "integrate/frame_check.h"
 #include "integrate/integrate.h"
 
 namespace py = pybind11;
@@ -163,6 +164,36 @@ Raises ValueError on bad input (size mismatch, empty mask, NaN, non-unit or back
       py::arg("intrinsics") = py::none(),
       "Unit normals (H, W, 3) of a height (or depth) map's surface by central differences; 0 "
       "where undefined.");
+  m.def(
+      "check_normal_frame",
+      [](const py::object& normals_in, const py::object& mask_in, int threads) {
+        const ImageF normals = ToImage(normals_in, "normals");
+        const Mask mask = mask_in.is_none() ? NonZeroPixels(normals)
+                                            : ToMask(mask_in, normals.width, normals.height);
+        integrate::FrameCheckOptions options;
+        options.threads = threads;
+        const integrate::FrameCheckResult r = integrate::CheckNormalFrame(normals, mask, options);
+        py::list readings;
+        for (const integrate::FrameReadingScore& s : r.scores) {
+          py::dict d;
+          d["reading"] = integrate::PlaneReadingName(s.reading);
+          d["silhouette_cos"] = s.silhouette_cos;
+          d["consistency_deg"] = s.consistency_deg;
+          readings.append(d);
+        }
+        py::dict out;
+        out["readings"] = readings;
+        out["silhouette_pixels"] = r.silhouette_pixels;
+        out["better"] = integrate::PlaneReadingName(r.better);
+        out["message"] = r.message;
+        return out;
+      },
+      py::arg("normals"), py::arg("mask") = py::none(), py::arg("threads") = 0,
+      "Which reading of a normal map's x and y axes (as given, y negated, x negated, swapped, "
+      "turned...) makes it the normals of a surface: per reading the silhouette cosine (normals "
+      "pointing out of the mask's edge: near 1 when right) and the mean angle to the surface "
+      "integrated from it. `better` is 'as given' unless another reading is clearly better, with "
+      "`message` saying why. A light file in another frame gives normals in that frame.");
 }
 
 }  // namespace iphong::python

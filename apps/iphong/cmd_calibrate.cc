@@ -226,6 +226,7 @@ void RunCalibrate(const CalibrateOptions& o) {
       throw std::runtime_error(o.normals + ": is " + SizeText(normals.width, normals.height) +
                                ", the images are " + SizeText(dataset.width(), dataset.height()));
     }
+    for (const std::string& w : io::CheckNormalMap(normals, &dataset.mask, o.normals)) Warn(w);
     from_normals(normals, dataset.mask, o.uniform_albedo);
   } else {
     std::vector<calibrate::SphereOutline> outlines;

@@ -235,6 +235,8 @@ void RunFitMaterial(const FitMaterialCommandOptions& o) {
 
   std::string normals_source;
   const ImageF normal_map = LoadNormals(o, dataset, &normals_source);
+  for (const std::string& w : io::CheckNormalMap(normal_map, &dataset.mask, normals_source))
+    Warn(w);
   std::vector<Vec3d> normals(data.pixel_count());
   for (std::size_t p = 0; p < data.pixel_count(); ++p) {
     const float* n = normal_map.pixels.data() + 3 * std::size_t(data.pixels[p]);

@@ -67,6 +67,9 @@ NormalInput ReadNormalInput(const IntegrateCommandOptions& o) {
   } else if (in.mask.width == in.normals.width && in.mask.height == in.normals.height) {
     in.mask = NonZeroPixels(in.normals, &in.mask);  // dataset masks include pixels GT leaves 0
   }
+  if (in.mask.width == in.normals.width && in.mask.height == in.normals.height) {
+    for (const std::string& w : io::CheckNormalMap(in.normals, &in.mask, o.normals)) Warn(w);
+  }
   if (!o.albedo.empty()) {
     in.albedo = io::ReadImage(o.albedo, memory);
   }

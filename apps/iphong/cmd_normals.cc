@@ -9,6 +9,7 @@
 #include "core/errors.h"
 #include "core/timing.h"
 #include "core/version.h"
+#include "integrate/frame_check.h"
 #include "integrate/integrate.h"
 #include "io/dataset.h"
 #include "io/dataset_text.h"
@@ -34,6 +35,18 @@ nlohmann::json MetricsJson(const solve::AngularErrorMetrics& m) {
           {"fraction_below_5_deg", m.below_5_deg},
           {"fraction_below_10_deg", m.below_10_deg},
           {"fraction_below_20_deg", m.below_20_deg}};
+}
+
+nlohmann::json FrameCheckJson(const integrate::FrameCheckResult& r) {
+  nlohmann::json readings = nlohmann::json::array();
+  for (const integrate::FrameReadingScore& s : r.scores) {
+    readings.push_back({{"reading", integrate::PlaneReadingName(s.reading)},
+                        {"silhouette_cos", s.silhouette_cos},
+                        {"consistency_deg", s.consistency_deg}});
+  }
+  return {{"better", integrate::PlaneReadingName(r.better)},
+          {"silhouette_pixels", r.silhouette_pixels},
+          {"readings", readings}};
 }
 
 void RunNormals(const NormalsCommandOptions& o) {
@@ -128,6 +141,32 @@ void RunNormals(const NormalsCommandOptions& o) {
   options.progress = nullptr;
   fit_progress.reset();  // clears its line
   const ImageF& ambiguity = result.ambiguity_deg;
+  // The light file's frame, from the normals it gave: one in another image-plane frame (y down,
+  // x mirrored, x and y swapped) returns the normals in that frame (integrate/frame_check.h).
+  // The one- and two-image solve is left out: its priors make any reading integrable. A file
+  // with most lights behind the object (z < 0) has had its own warning: its fix (y and z
+  // negated) is not a reading of the image plane.
+  std::size_t behind = 0;
+  for (const Vec3d& l : data.light_directions) behind += l.z() < 0;
+  std::optional<integrate::FrameCheckResult> frame;
+  if (ambiguity.pixels.empty() && !near_run && 2 * behind <= data.light_directions.size()) {
+    Mask with_normal = dataset.mask;
+    for (std::size_t p = 0; p < with_normal.inside.size(); ++p)
+      with_normal.inside[p] = with_normal.inside[p] && result.residual.pixels[p] >= 0;
+    integrate::FrameCheckOptions check;
+    check.threads = o.common.threads;
+    frame = integrate::CheckNormalFrame(result.normals, with_normal, check);
+    if (!frame->message.empty()) {
+      const std::string& lights = dataset.files.lights_path;
+      const std::string text =
+          (lights.empty() ? o.dataset : lights) +
+          ": the light directions look like another frame: " + frame->message +
+          "; check the file's axes (x right, y up toward row 0, z toward the " + "camera)" +
+          (o.strict ? "" : ", or pass --strict to refuse such a file");
+      if (o.strict) throw std::runtime_error(text);
+      Warn(text);
+    }
+  }
 
   metrics["iphong_version"] = kVersion;
   metrics["dataset"] = o.dataset;
@@ -174,6 +213,7 @@ void RunNormals(const NormalsCommandOptions& o) {
                                         {"eigen_gap", estimated->eigen_gap},
                                         {"lambert_residual", estimated->lambert_residual}};
   }
+  if (frame) metrics["frame_check"] = FrameCheckJson(*frame);
   metrics["dark_pixels"] = result.summary.dark_pixels;
   metrics["underdetermined_pixels"] = result.summary.underdetermined_pixels;
   metrics["material"] = MaterialLabel(options, result);
@@ -404,6 +444,9 @@ void AddNormalsCommand(CLI::App& app) {
                 "Estimate each light's RGB intensity with the normals (semi-calibrated; the "
                 "intensity file is not used; written as light_intensities.txt, each channel's "
                 "mean 1)");
+  cmd->add_flag("--strict", o->strict,
+                "Refuse (exit 1, nothing written) a light file whose normals read better in "
+                "another frame (y down, x mirrored, x and y swapped) instead of warning");
   cmd->add_option("--band-rows", o->band_rows,
                   "Read and solve the capture in bands of this many rows (default: only when it "
                   "does not fit in --memory-limit, in bands that do; the result is the same)")

@@ -71,6 +71,7 @@ void RunRelight(const RelightCommandOptions& o) {
     }
   }
   const ImageF normals = io::ReadNormalMap(in_dir("normals.exr"), false, nullptr, memory);
+  for (const std::string& w : io::CheckNormalMap(normals, nullptr, in_dir("normals.exr"))) Warn(w);
   const ImageF albedo = io::ReadImage(in_dir("albedo.exr"), memory);
   if (albedo.width != normals.width || albedo.height != normals.height || albedo.channels != 3) {
     throw std::runtime_error(in_dir("albedo.exr") + ": is " +

@@ -49,6 +49,7 @@ integrate = _short_type_errors(_core.integrate)
 relight = _short_type_errors(_core.relight)
 height_to_mesh = _short_type_errors(_core.height_to_mesh)
 normals_from_height = _short_type_errors(_core.normals_from_height)
+check_normal_frame = _short_type_errors(_core.check_normal_frame)
 
 _MATERIAL_KEYS = ("ka", "kd", "ks", "shininess")
 
@@ -294,6 +295,7 @@ __all__ = [
     "PointLight",
     "angular_error",
     "calibrate_lights",
+    "check_normal_frame",
     "estimate_intensities",
     "estimate_normals",
     "fit_material",

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "integrate/frame_check.h"
 #include "io/dataset.h"
 #include "io/files.h"
 #include "io/image_io.h"
@@ -65,6 +66,64 @@ ImageF ReadNormalMap(const std::string& path, bool directx, Mask* mask, const Me
   for (std::size_t p = 0; p < image.pixel_count(); ++p)
     for (int c = 0; c < 3; ++c) xyz.pixels[3 * p + c] = image.pixels[p * image.channels + c];
   return xyz;
+}
+
+std::vector<std::string> CheckNormalMap(const ImageF& normals, const Mask* mask,
+                                        const std::string& path) {
+  if (normals.channels != 3) throw std::runtime_error(path + ": a normal map needs 3 channels");
+  if (mask && (mask->width != normals.width || mask->height != normals.height)) {
+    throw std::runtime_error(path + ": is " + SizeText(normals.width, normals.height) +
+                             ", the mask " + SizeText(mask->width, mask->height));
+  }
+  std::size_t not_finite = 0, not_unit = 0, first_nan = 0, first_bad = 0, facing_away = 0;
+  float bad_length = 0;
+  Mask present(normals.width, normals.height, false);
+  for (std::size_t p = 0; p < normals.pixel_count(); ++p) {
+    if (mask && !mask->inside[p]) continue;
+    const float* v = normals.pixels.data() + 3 * p;
+    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) {
+      if (not_finite++ == 0) first_nan = p;
+      continue;
+    }
+    if (v[0] == 0 && v[1] == 0 && v[2] == 0) continue;
+    const float length = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (std::abs(length - 1) > 0.01f) {
+      if (not_unit++ == 0) first_bad = p, bad_length = length;
+      continue;
+    }
+    present.inside[p] = 1;
+    facing_away += v[2] < 0;
+  }
+  auto where = [&](std::size_t p) {
+    return "column " + std::to_string(p % normals.width) + ", row " +
+           std::to_string(p / normals.width);
+  };
+  if (not_finite > 0) {
+    throw std::runtime_error(path + ": " + std::to_string(not_finite) +
+                             " normals are not finite (NaN or infinite; the first at " +
+                             where(first_nan) + "): a normal map holds unit vectors, 0 where " +
+                             "there is none");
+  }
+  if (not_unit > 0) {
+    char length[32];
+    std::snprintf(length, sizeof length, "%.4g", bad_length);
+    throw std::runtime_error(path + ": " + std::to_string(not_unit) +
+                             " normals are not unit length (|n| = " + length + " at " +
+                             where(first_bad) + "): a normal map holds unit vectors");
+  }
+  std::vector<std::string> warnings;
+  const std::size_t count = present.count();
+  if (count == 0) return warnings;
+  // Most normals facing away is a frame with z negated, no reading of the image plane: the
+  // commands refuse or warn about it themselves.
+  if (2 * facing_away > count) return warnings;
+  const integrate::FrameCheckResult frame = integrate::CheckNormalFrame(normals, present);
+  if (!frame.message.empty()) {
+    warnings.push_back(path + ": the normals look like another frame: " + frame.message +
+                       "; iphong's frame has x right, y up toward row 0, z toward the camera" +
+                       " (a DirectX-convention picture has y negated)");
+  }
+  return warnings;
 }
 
 double ErrorMapScale(const ImageF& error_deg, const Mask& mask) {

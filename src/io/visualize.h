@@ -24,6 +24,15 @@ ImageF NormalsFromPicture(const ImageF& picture, bool directx, Mask* mask);
 ImageF ReadNormalMap(const std::string& path, bool directx, Mask* mask,
                      const MemoryLimit& memory = {});
 
+// A normal map handed to a command (relight, fit-material, calibrate-lights --normals): every
+// normal within `mask` (all pixels when null) finite and of unit length within 1 %, zero vectors
+// being "no normal" there; throws std::runtime_error naming `path`, how many pixels are wrong
+// and the first ("... 120 normals are not unit length (|n| = 2 at column 4, row 9)"). Returns
+// the warning the map's own geometry gives when another frame of the image plane reads better
+// (integrate/frame_check.h; not checked when most normals face away from the camera).
+std::vector<std::string> CheckNormalMap(const ImageF& normals, const Mask* mask,
+                                        const std::string& path);
+
 // The scale an error map is drawn to: the 99th percentile of the errors inside the mask, rounded
 // up to 1, 2 or 5 × 10^k (at least 1e-6), so the map shows where the error is whatever
 // its size (a 0.08° error on a 0-10° scale is uniformly blue).

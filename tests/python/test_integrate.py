@@ -62,3 +62,48 @@ def test_mesh_and_errors():
         iphong.integrate(normals, np.zeros((30, 40), bool))
     with pytest.raises(ValueError, match="unknown integration method"):
         iphong.integrate(normals, method="poisson")
+
+
+def lumpy_capture(lights, width=96, height=80):
+    """A numpy Lambert render (no iphong code) of an ellipsoid with two off-centre bumps: images
+    (K, H, W), mask, true normals."""
+    cols, rows = np.meshgrid(np.arange(width) + 0.5, np.arange(height) + 0.5)
+    x, y = cols - width / 2, height / 2 - rows
+    a, b = 0.45 * width, 0.42 * height
+    e = 1 - (x / a) ** 2 - (y / b) ** 2
+    mask = e > 0.01
+    r = 0.5 * (a + b)
+    root = np.sqrt(np.clip(e, 0.01, None))
+    p, q = -r * x / (a * a * root), -r * y / (b * b * root)
+    for cx, cy, s in ((12.0, 10.0, 10.0), (-15.0, -6.0, 8.0)):
+        g = 0.6 * s * np.exp(-((x - cx) ** 2 + (y - cy) ** 2) / s**2)
+        p, q = p - 2 * (x - cx) / s**2 * g, q - 2 * (y - cy) / s**2 * g
+    n = np.dstack([-p, -q, np.ones_like(p)])
+    n /= np.linalg.norm(n, axis=2, keepdims=True)
+    n[~mask] = 0
+    images = np.clip(np.einsum("hwc,kc->khw", n, lights), 0, None).astype(np.float32)
+    return images, mask, n.astype(np.float32)
+
+
+def test_check_normal_frame_names_the_reading_of_a_slipped_light_file():
+    """A light file with y negated gives normals with y negated (the model is symmetric under
+    the plane's reflections and turns, which fix the view): Woodham's exactly, and the check names
+    the reading that undoes it; the right file gives no message."""
+    rng = np.random.default_rng(3)
+    lights = rng.normal(size=(12, 3))
+    lights[:, 2] = np.abs(lights[:, 2]) + 1.2
+    lights /= np.linalg.norm(lights, axis=1, keepdims=True)
+    images, mask, truth = lumpy_capture(lights)
+    right = iphong.estimate_normals(images, lights, mask=mask, model="lambert")["normals"]
+    flip = np.diag([1.0, -1.0, 1.0])
+    slipped = iphong.estimate_normals(images, lights @ flip, mask=mask, model="lambert")["normals"]
+    assert np.abs(slipped[mask] @ flip - right[mask]).max() < 1e-5
+    quiet = iphong.check_normal_frame(right, mask)
+    assert quiet["better"] == "as given" and quiet["message"] == ""
+    assert quiet["readings"][0]["silhouette_cos"] > 0.8
+    named = iphong.check_normal_frame(slipped, mask)
+    assert named["better"] == "y negated"
+    assert named["message"].startswith("read with y negated, the normals fit the object better")
+    assert [r["reading"] for r in named["readings"]][:2] == ["as given", "y negated"]
+    with pytest.raises(ValueError):
+        iphong.check_normal_frame(np.full((4, 4, 3), np.nan, np.float32), np.ones((4, 4), bool))

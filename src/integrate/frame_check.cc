@@ -1,0 +1,292 @@
+#include "integrate/frame_check.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+
+#include "integrate/integrate.h"
+
+namespace iphong::integrate {
+
+namespace {
+
+template <typename T>
+Vec3T<T> Apply(PlaneReading reading, const Vec3T<T>& v) {
+  switch (reading) {
+    case PlaneReading::kAsGiven:
+      return v;
+    case PlaneReading::kYNegated:
+      return {v.x(), -v.y(), v.z()};
+    case PlaneReading::kXNegated:
+      return {-v.x(), v.y(), v.z()};
+    case PlaneReading::kXYNegated:
+      return {-v.x(), -v.y(), v.z()};
+    case PlaneReading::kSwapped:
+      return {v.y(), v.x(), v.z()};
+    case PlaneReading::kSwappedNegated:
+      return {-v.y(), -v.x(), v.z()};
+    case PlaneReading::kRotated90:
+      return {-v.y(), v.x(), v.z()};
+    case PlaneReading::kRotated270:
+      return {v.y(), -v.x(), v.z()};
+  }
+  return v;
+}
+
+// The field averaged over f×f blocks (a block is kept when at least half of it is inside and
+// its mean normal is not zero), normalized.
+void Downsample(const ImageF& normals, const Mask& mask, int f, ImageF* out, Mask* out_mask) {
+  const int w = (mask.width + f - 1) / f, h = (mask.height + f - 1) / f;
+  *out = ImageF(w, h, 3, 0.0f);
+  *out_mask = Mask(w, h, false);
+  for (int br = 0; br < h; ++br) {
+    for (int bc = 0; bc < w; ++bc) {
+      Vec3d sum = Vec3d::Zero();
+      int inside = 0, total = 0;
+      for (int r = br * f; r < std::min(mask.height, (br + 1) * f); ++r) {
+        for (int c = bc * f; c < std::min(mask.width, (bc + 1) * f); ++c) {
+          ++total;
+          const std::size_t p = static_cast<std::size_t>(r) * mask.width + c;
+          if (!mask.inside[p]) continue;
+          const float* n = normals.pixels.data() + 3 * p;
+          const Vec3d v(n[0], n[1], n[2]);
+          if (v.norm() == 0) continue;
+          sum += v.normalized();
+          ++inside;
+        }
+      }
+      if (2 * inside < total || !(sum.norm() > 1e-6 * inside)) continue;
+      const Vec3d n = sum.normalized();
+      float* o = out->at(bc, br);
+      o[0] = static_cast<float>(n.x()), o[1] = static_cast<float>(n.y());
+      o[2] = static_cast<float>(n.z());
+      out_mask->inside[static_cast<std::size_t>(br) * w + bc] = 1;
+    }
+  }
+}
+
+// Mean angle (degrees) between the field and the normals of its least-squares surface.
+double ConsistencyDeg(const ImageF& normals, const Mask& mask, int threads) {
+  IntegrateOptions options;
+  options.method = Method::kQuadratic;
+  options.allow_back_facing = true;
+  options.threads = threads;
+  const IntegrateResult r = IntegrateNormals(normals, mask, options);
+  const int w = mask.width, h = mask.height;
+  auto in = [&](int c, int row) {
+    return c >= 0 && row >= 0 && c < w && row < h &&
+           mask.inside[static_cast<std::size_t>(row) * w + c];
+  };
+  auto z = [&](int c, int row) { return double(r.height.pixels[std::size_t(row) * w + c]); };
+  // One-sided where a neighbour is missing; pixels with no neighbour along an axis are skipped.
+  auto slope = [&](int c, int row, int dc, int dr, double* out) {
+    const bool fwd = in(c + dc, row + dr), back = in(c - dc, row - dr);
+    if (fwd && back)
+      *out = 0.5 * (z(c + dc, row + dr) - z(c - dc, row - dr));
+    else if (fwd)
+      *out = z(c + dc, row + dr) - z(c, row);
+    else if (back)
+      *out = z(c, row) - z(c - dc, row - dr);
+    else
+      return false;
+    return true;
+  };
+  double sum = 0;
+  std::size_t count = 0;
+  for (int row = 0; row < h; ++row) {
+    for (int c = 0; c < w; ++c) {
+      if (!in(c, row)) continue;
+      double d_col, d_row;
+      if (!slope(c, row, 1, 0, &d_col) || !slope(c, row, 0, 1, &d_row)) continue;
+      // p = ∂z/∂x = ∂z/∂col, q = ∂z/∂y = −∂z/∂row; the surface normal is (−p, −q, 1).
+      const Vec3d back = Vec3d(-d_col, d_row, 1).normalized();
+      const float* n = normals.at(c, row);
+      const double cos = std::clamp(back.dot(Vec3d(n[0], n[1], n[2])), -1.0, 1.0);
+      sum += std::acos(cos) * 180 / M_PI;
+      ++count;
+    }
+  }
+  return count ? sum / count : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
+
+const char* PlaneReadingName(PlaneReading reading) {
+  switch (reading) {
+    case PlaneReading::kAsGiven:
+      return "as given";
+    case PlaneReading::kYNegated:
+      return "y negated";
+    case PlaneReading::kXNegated:
+      return "x negated";
+    case PlaneReading::kXYNegated:
+      return "x and y negated";
+    case PlaneReading::kSwapped:
+      return "x and y swapped";
+    case PlaneReading::kSwappedNegated:
+      return "x and y swapped and negated";
+    case PlaneReading::kRotated90:
+      return "x and y turned 90 degrees";
+    case PlaneReading::kRotated270:
+      return "x and y turned 270 degrees";
+  }
+  return "?";
+}
+
+Vec3f ApplyReading(PlaneReading reading, const Vec3f& v) { return Apply(reading, v); }
+Vec3d ApplyReading(PlaneReading reading, const Vec3d& v) { return Apply(reading, v); }
+
+std::string FrameCheckOptions::Validate() const {
+  if (max_side < 8) return "max_side must be at least 8";
+  if (min_silhouette_pixels < 1) return "min_silhouette_pixels must be at least 1";
+  if (!(silhouette_margin > 0 && silhouette_margin <= 2)) return "silhouette_margin in (0, 2]";
+  if (!(integrability_ratio >= 1) || !std::isfinite(integrability_ratio))
+    return "integrability_ratio must be finite and at least 1";
+  return "";
+}
+
+FrameCheckResult CheckNormalFrame(const ImageF& normals_cam, const Mask& mask,
+                                  const FrameCheckOptions& options) {
+  if (auto m = options.Validate(); !m.empty()) throw std::invalid_argument(m);
+  if (normals_cam.channels != 3 || normals_cam.width != mask.width ||
+      normals_cam.height != mask.height) {
+    throw std::invalid_argument("the normal map's size differs from the mask's");
+  }
+  const int w = mask.width, h = mask.height;
+  Mask usable(w, h, false);
+  for (std::size_t p = 0; p < mask.inside.size(); ++p) {
+    if (!mask.inside[p]) continue;
+    const float* n = normals_cam.pixels.data() + 3 * p;
+    if (!std::isfinite(n[0]) || !std::isfinite(n[1]) || !std::isfinite(n[2]))
+      throw std::invalid_argument("a normal inside the mask is not finite");
+    usable.inside[p] = n[0] != 0 || n[1] != 0 || n[2] != 0;
+  }
+
+  FrameCheckResult result;
+  result.scores.resize(kPlaneReadings);
+  for (int i = 0; i < kPlaneReadings; ++i) result.scores[i].reading = PlaneReading(i);
+
+  // Silhouette: Σ over steep edge pixels of the outward step (sum of the 8-neighbour steps that
+  // leave the mask inside the image), against each reading of n_xy.
+  double cos_sum[kPlaneReadings] = {};
+  std::size_t steep = 0;
+  for (int row = 0; row < h; ++row) {
+    for (int c = 0; c < w; ++c) {
+      const std::size_t p = static_cast<std::size_t>(row) * w + c;
+      if (!usable.inside[p]) continue;
+      double ox = 0, oy = 0;
+      for (int dr = -1; dr <= 1; ++dr) {
+        for (int dc = -1; dc <= 1; ++dc) {
+          const int r2 = row + dr, c2 = c + dc;
+          if ((dr == 0 && dc == 0) || r2 < 0 || c2 < 0 || r2 >= h || c2 >= w) continue;
+          if (mask.inside[static_cast<std::size_t>(r2) * w + c2]) continue;
+          ox += dc, oy -= dr;
+        }
+      }
+      const double out_len = std::hypot(ox, oy);
+      if (out_len == 0) continue;
+      const float* n = normals_cam.pixels.data() + 3 * p;
+      const Vec3d v = Vec3d(n[0], n[1], n[2]).normalized();
+      const double xy = std::hypot(v.x(), v.y());
+      if (xy < 0.5) continue;
+      ++steep;
+      for (int i = 0; i < kPlaneReadings; ++i) {
+        const Vec3d t = Apply(PlaneReading(i), v);
+        cos_sum[i] += (t.x() * ox + t.y() * oy) / (out_len * xy);
+      }
+    }
+  }
+  result.silhouette_pixels = steep;
+  const bool silhouette = steep >= static_cast<std::size_t>(options.min_silhouette_pixels);
+  for (int i = 0; i < kPlaneReadings; ++i) {
+    result.scores[i].silhouette_cos =
+        silhouette ? cos_sum[i] / steep : std::numeric_limits<double>::quiet_NaN();
+  }
+
+  // Integrability on a field of at most max_side a side. Readings related by a half turn share
+  // their figure (the same surface upside down), so four integrations serve the eight.
+  const int factor = std::max(1, (std::max(w, h) + options.max_side - 1) / options.max_side);
+  ImageF small;
+  Mask small_mask;
+  Downsample(normals_cam, usable, factor, &small, &small_mask);
+  const bool integrable = small_mask.count() >= 16;
+  for (int i = 0; i < 4; ++i) {
+    const PlaneReading reading = i == 0   ? PlaneReading::kAsGiven
+                                 : i == 1 ? PlaneReading::kYNegated
+                                 : i == 2 ? PlaneReading::kSwapped
+                                          : PlaneReading::kRotated90;
+    const PlaneReading half_turn = i == 0   ? PlaneReading::kXYNegated
+                                   : i == 1 ? PlaneReading::kXNegated
+                                   : i == 2 ? PlaneReading::kSwappedNegated
+                                            : PlaneReading::kRotated270;
+    double deg = std::numeric_limits<double>::quiet_NaN();
+    if (integrable) {
+      ImageF read = small;
+      for (std::size_t p = 0; p < small_mask.inside.size(); ++p) {
+        if (!small_mask.inside[p]) continue;
+        float* n = read.pixels.data() + 3 * p;
+        const Vec3f t = Apply(reading, Vec3f(n[0], n[1], n[2]));
+        n[0] = t.x(), n[1] = t.y(), n[2] = t.z();
+      }
+      deg = ConsistencyDeg(read, small_mask, options.threads);
+    }
+    result.scores[int(reading)].consistency_deg = deg;
+    result.scores[int(half_turn)].consistency_deg = deg;
+  }
+
+  // The verdict.
+  const FrameReadingScore& given = result.scores[0];
+  int pick = 0;
+  char why[200] = "";
+  if (silhouette) {
+    int best = 0;
+    for (int i = 1; i < kPlaneReadings; ++i) {
+      if (result.scores[i].silhouette_cos > result.scores[best].silhouette_cos) best = i;
+    }
+    const FrameReadingScore& b = result.scores[best];
+    const bool surface_agrees =
+        !integrable || b.consistency_deg <= given.consistency_deg * 1.05 + 1e-9;
+    if (best != 0 && b.silhouette_cos >= options.silhouette_margin &&
+        b.silhouette_cos - given.silhouette_cos >= options.silhouette_margin && surface_agrees) {
+      pick = best;
+      std::snprintf(why, sizeof why,
+                    "its normals point out of the silhouette (mean cosine %.2f against %.2f as "
+                    "given) and lie %.1f deg from a surface (%.1f as given)",
+                    b.silhouette_cos, given.silhouette_cos, b.consistency_deg,
+                    given.consistency_deg);
+    }
+  }
+  if (pick == 0 && integrable) {
+    int best = 0;
+    for (int i = 1; i < kPlaneReadings; ++i) {
+      if (result.scores[i].consistency_deg < result.scores[best].consistency_deg) best = i;
+    }
+    const FrameReadingScore& b = result.scores[best];
+    // With a silhouette, a reading it contradicts is not taken on integrability alone.
+    const bool silhouette_agrees = !silhouette || b.silhouette_cos >= given.silhouette_cos - 0.1;
+    if (best != 0 && given.consistency_deg >= options.integrability_ratio * b.consistency_deg &&
+        silhouette_agrees) {
+      pick = best;
+      std::snprintf(why, sizeof why,
+                    "its normals lie %.1f deg from a surface integrated from them, against %.1f "
+                    "as given",
+                    b.consistency_deg, given.consistency_deg);
+    }
+  }
+  result.better = PlaneReading(pick);
+  if (pick != 0) {
+    result.message = std::string("read with ") + PlaneReadingName(result.better) +
+                     ", the normals fit the object better: " + why;
+    if (!silhouette || std::isnan(result.scores[pick].silhouette_cos)) {
+      // T and T after a half turn give the same surface upside down.
+      static const int kHalfTurn[kPlaneReadings] = {3, 2, 1, 0, 5, 4, 7, 6};
+      result.message += std::string(" (or ") + PlaneReadingName(PlaneReading(kHalfTurn[pick])) +
+                        ": the same surface upside down, which only a silhouette tells apart)";
+    }
+  }
+  return result;
+}
+
+}  // namespace iphong::integrate
