@@ -94,13 +94,14 @@ void BindRender(py::module_& m) {
       "load_dataset",
       [](const std::string& directory, const py::object& max_memory_gb, const std::string& lights,
          const std::string& intensities, const std::string& mask, const std::string& encoding,
-         const py::object& crop, int downscale) {
+         const py::object& crop, int downscale, const std::string& images) {
         io::Dataset d;
         io::DatasetLoadOptions options;
         options.memory = MemoryLimitFrom(max_memory_gb);
         options.capture.lights = lights;
         options.capture.intensities = intensities;
         options.capture.mask = mask;
+        options.capture.images = images;
         options.capture.encoding = encoding;
         options.capture.downscale = downscale;
         if (!crop.is_none()) {
@@ -154,6 +155,7 @@ void BindRender(py::module_& m) {
           }
         }
         result["warnings"] = d.warnings;
+        result["not_read"] = d.files.skipped;
         result["description"] = io::DescribeDataset(d);
         result["encoding"] = d.encoding.encoding == io::Encoding::kSrgb ? "srgb" : "linear";
         py::list counts;
@@ -169,12 +171,15 @@ void BindRender(py::module_& m) {
       py::arg("directory"), py::arg("max_memory_gb") = py::none(), py::kw_only(),
       py::arg("lights") = "", py::arg("intensities") = "", py::arg("mask") = "",
       py::arg("encoding") = "auto", py::arg("crop") = py::none(), py::arg("downscale") = 1,
+      py::arg("images") = "",
       R"doc(Read a capture folder into numpy arrays: any layout `iphong normals` reads (DiLiGenT,
-UW, RTI .lp, a folder of images with a light file), with the same options (lights, intensities,
-mask: files; encoding "auto"/"linear"/"srgb"; crop (x, y, w, h) in the files' pixels; downscale N).
+UW, RTI .lp, a folder of images with a light file), with the same options (images: a list of the
+photos in light order; lights, intensities, mask: files; encoding "auto"/"linear"/"srgb"; crop
+(x, y, w, h) in the files' pixels; downscale N).
 Returns images (K, H, W, 3) float32 linear, light_directions (K, 3), light_intensities (K, 3),
 mask (H, W) bool, normal_gt (H, W, 3) or None, material (dict) or None, filenames, warnings,
-description (what was read, one line), encoding, image_counts (saturated and black pixels); for a
+not_read (files beside the photos taken for companions, an albedo picture or *.normals.dat, and
+not read), description (what was read, one line), encoding, image_counts (saturated and black pixels); for a
 near-light capture (light_positions.txt) also light_positions (K, 3) mm, camera (camera.json's
 dict), light_axes (K, 3) and light_anisotropy (K) or None, depth_gt (H, W) mm or None (all None
 otherwise): what estimate_normals takes.

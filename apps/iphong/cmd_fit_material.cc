@@ -219,6 +219,7 @@ void RunFitMaterial(const FitMaterialCommandOptions& o) {
   folder.inputs = {o.dataset,
                    o.normals,
                    o.regions,
+                   o.capture.options.images,
                    o.capture.options.lights,
                    o.capture.options.intensities,
                    o.capture.options.mask};

@@ -57,8 +57,8 @@ void RunNormals(const NormalsCommandOptions& o) {
   folder.command = "normals";
   folder.overwrite = o.common.overwrite;
   // Every file the run reads: the folder, and what the capture flags name outside it.
-  folder.inputs = {o.dataset, o.capture.options.lights, o.capture.options.intensities,
-                   o.capture.options.mask};
+  folder.inputs = {o.dataset, o.capture.options.images, o.capture.options.lights,
+                   o.capture.options.intensities, o.capture.options.mask};
   io::OutputFolder out(o.output_dir, folder);
   {
     // The capture's headers and mask first: when its observations and results would not fit in

@@ -55,6 +55,10 @@ void AddCaptureOptions(CLI::App* cmd, CaptureFlags& f) {
                   "AliceVision lights JSON (default: found in the folder or its parent)");
   cmd->add_option("--intensities", f.options.intensities,
                   "Light intensities, 'r g b' per light (default: light_intensities.txt, else 1)");
+  cmd->add_option("--images", f.options.images,
+                  "A text file naming the photos in light order, one per line (default: "
+                  "filenames.txt, the .lp, FOLDER.txt here or one folder up, images.txt; else "
+                  "the folder's images in natural order)");
   cmd->add_option("--mask", f.options.mask,
                   "Mask picture, nonzero = object (default: mask.png, mask.*, NAME.mask.*, "
                   "NAME_mask.*; else the whole image)");

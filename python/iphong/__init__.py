@@ -265,10 +265,11 @@ def _path(value, what):
 
 @_short_type_errors
 def load_dataset(directory, max_memory_gb=None, *, lights=None, intensities=None, mask=None,
-                 encoding="auto", crop=None, downscale=1):
+                 encoding="auto", crop=None, downscale=1, images=None):
     """Read a capture folder into numpy arrays; see _core.load_dataset."""
     files = {name: "" if value is None else _path(value, name)
-             for name, value in (("lights", lights), ("intensities", intensities), ("mask", mask))}
+             for name, value in (("lights", lights), ("intensities", intensities), ("mask", mask),
+                                 ("images", images))}
     if not isinstance(encoding, str):
         raise TypeError(f"encoding: expected 'auto', 'linear' or 'srgb', got {type(encoding).__name__}")
     if isinstance(downscale, bool) or not isinstance(downscale, int):

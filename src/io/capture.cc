@@ -8,6 +8,7 @@
 
 #include "io/dataset_text.h"
 #include "io/files.h"
+#include "io/image_list.h"
 #include "io/json_reader.h"
 
 namespace iphong::io {
@@ -59,37 +60,6 @@ fs::path Absolute(const fs::path& dir) {
 std::string Stem(const std::string& name) {
   const std::size_t dot = name.rfind('.');
   return dot == std::string::npos ? name : name.substr(0, dot);
-}
-
-// 0: "mask", 1: "<x>.mask", "<x>_mask", "<x>-mask"; -1: not a mask's name.
-int MaskRank(const std::string& name) {
-  if (!HasImageExtension(name)) return -1;
-  const std::string stem = Lower(Stem(name));
-  if (stem == "mask") return 0;
-  for (const char* suffix : {".mask", "_mask", "-mask"}) {
-    const std::string s(suffix);
-    if (stem.size() > s.size() && stem.compare(stem.size() - s.size(), s.size(), s) == 0) return 1;
-  }
-  return -1;
-}
-
-// Files of a capture folder that are not light images: ground truth and what iphong writes.
-bool IsCompanionImage(const std::string& name) {
-  static const std::set<std::string> kStems = {"normal_gt", "normals",   "normal",   "depth",
-                                               "albedo",    "residual",  "specular", "error",
-                                               "height",    "ambiguity", "clusters", "thumbnail"};
-  return MaskRank(name) >= 0 || kStems.count(Lower(Stem(name))) > 0;
-}
-
-// A text file that names images (one per line), not numbers.
-bool ListsImages(const fs::path& file) {
-  if (!Exists(file)) return false;
-  const std::string text = ReadTextFile(file.string());
-  const std::size_t start = text.find_first_not_of(" \t\r\n\xEF\xBB\xBF");
-  if (start == std::string::npos) return false;
-  std::string first = text.substr(start, text.find_first_of("\r\n", start) - start);
-  first.erase(first.find_last_not_of(" \t") + 1);
-  return HasImageExtension(first);
 }
 
 // The one file in `names` with extension `ext` (lower case, with the dot), or "".
@@ -147,19 +117,14 @@ fs::path FindLightFile(const fs::path& dir, const std::vector<std::string>& file
        "file here or in the parent folder; name one with --lights FILE");
 }
 
-// An image a .lp names: as written relative to the .lp's folder or the capture's, else by its
-// base name there (RTIBuilder writes absolute Windows paths of the machine it ran on).
+// An image a .lp names (io/image_list.h's rule).
 fs::path ResolveLpImage(const std::string& name, const fs::path& lp, const fs::path& dir) {
-  std::string base = name;
-  if (const std::size_t cut = base.find_last_of("/\\"); cut != std::string::npos) {
-    base = base.substr(cut + 1);
+  fs::path found = ResolveListedImage(name, lp, dir);
+  if (found.empty()) {
+    Fail(lp, "names " + name + ", which is in neither " + lp.parent_path().string() + " nor " +
+                 dir.string());
   }
-  for (const fs::path& candidate :
-       {lp.parent_path() / name, dir / name, lp.parent_path() / base, dir / base}) {
-    if (Exists(candidate)) return candidate.lexically_normal();
-  }
-  Fail(lp, "names " + name + ", which is in neither " + lp.parent_path().string() + " nor " +
-               dir.string());
+  return found;
 }
 
 std::string Range(const std::vector<std::string>& names) {
@@ -198,6 +163,28 @@ bool NaturalLess(const std::string& a, const std::string& b) {
   return a < b;  // equal up to case and zeros: any fixed order
 }
 
+// The last part of a file's stem after a '.', '_' or '-' ("albedo" of "buddha.albedo.tga").
+std::string LastStemPart(const std::string& name) {
+  const std::string stem = Lower(Stem(name));
+  const std::size_t cut = stem.find_last_of("._-");
+  return cut == std::string::npos ? stem : stem.substr(cut + 1);
+}
+
+int MaskNameRank(const std::string& name) {
+  if (!HasImageExtension(name)) return -1;
+  const std::string stem = Lower(Stem(name));
+  if (stem == "mask") return 0;
+  return stem.size() > 5 && LastStemPart(name) == "mask" ? 1 : -1;
+}
+
+bool IsCompanionImage(const std::string& name) {
+  static const std::set<std::string> kStems = {
+      "normal_gt", "normals", "normal", "depth",     "depths",   "albedo",   "residual",
+      "specular",  "error",   "height", "ambiguity", "clusters", "thumbnail"};
+  return MaskNameRank(name) >= 0 || kStems.count(Lower(Stem(name))) > 0 ||
+         kStems.count(LastStemPart(name)) > 0;
+}
+
 bool HasImageExtension(const std::string& name) {
   static const std::set<std::string> kExtensions = {
       ".png", ".jpg", ".jpeg", ".tif",  ".tiff", ".tga", ".exr", ".bmp", ".ppm",
@@ -227,7 +214,21 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
 
   // The images, and the lights when the list gives them.
   fs::path light_file = options.lights.empty() ? fs::path() : fs::path(options.lights);
-  if (Exists(dir / "filenames.txt")) {
+  std::string listed_mask;  // a mask the image list names
+  // The photos as a list names them: count line, paths, the mask among them (UW's).
+  auto take_list = [&](const fs::path& list) {
+    ImageList read = ReadImageList(list, dir);
+    c.layout = "listed";
+    c.names = std::move(read.names);
+    c.paths = std::move(read.paths);
+    c.order = list.string();
+    listed_mask = read.mask_path;
+  };
+  if (!options.images.empty()) {
+    if (light_file.empty() && options.lights_needed) light_file = FindLightFile(dir, files);
+    take_list(options.images);
+    if (Lower(light_file.extension().string()) == ".lp") c.layout = "RTI .lp, listed";
+  } else if (Exists(dir / "filenames.txt")) {
     c.layout = "DiLiGenT";
     const fs::path list = dir / "filenames.txt";
     c.names = ParseFilenames(ReadTextFile(list.string()), list.string());
@@ -239,16 +240,16 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
     }
   } else {
     if (light_file.empty() && options.lights_needed) light_file = FindLightFile(dir, files);
+    // <folder>.txt or images.txt here, or UW's <folder>.txt one folder up.
+    const std::string own = Absolute(dir).filename().string() + ".txt";
     fs::path list;
-    for (const std::string& name :
-         {Absolute(dir).filename().string() + ".txt", std::string("images.txt")})
-      if (list.empty() && ListsImages(dir / name)) list = dir / name;
+    for (const fs::path& candidate :
+         {dir / own, dir / "images.txt", (dir / ".." / own).lexically_normal()})
+      if (list.empty() && LooksLikeImageList(candidate)) list = candidate;
     if (Lower(light_file.extension().string()) == ".lp") {
       c.layout = "RTI .lp";
     } else if (!list.empty()) {
-      c.layout = "listed";
-      c.names = ParseFilenames(ReadTextFile(list.string()), list.string());
-      c.order = list.filename().string();
+      take_list(list);
     } else {
       c.layout = "folder";
       // A mask named with --mask may sit among the images under any name.
@@ -256,9 +257,10 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
         std::error_code e;
         return !options.mask.empty() && fs::equivalent(dir / name, options.mask, e);
       };
-      for (const std::string& name : files)
-        if (HasImageExtension(name) && !IsCompanionImage(name) && !named_mask(name))
-          c.names.push_back(name);
+      for (const std::string& name : files) {
+        if (!HasImageExtension(name) || named_mask(name) || MaskNameRank(name) >= 0) continue;
+        if (!IsCompanionImage(name)) c.names.push_back(name);
+      }
       c.order = "natural order";
       if (c.names.empty()) Fail(dir, "holds no image files (and no filenames.txt)");
     }
@@ -316,7 +318,8 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
       Fail(c.lights_path, "has " + std::to_string(c.light_directions.size()) + " lights, but " +
                               directory + " holds " + std::to_string(c.names.size()) + " images (" +
                               Range(c.names) +
-                              "); list the images in filenames.txt, in light order");
+                              "); give the images in light order with --images LIST (a text "
+                              "file, one name per line)");
     }
   }
   if (options.lights_needed && !c.near.present()) {
@@ -347,9 +350,11 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
     }
     if (repeated > 0) {
       const std::string example = c.names[first] + " " + std::to_string(times) + " times";
-      c.warnings.push_back((c.layout == "folder" ? dir : dir / c.order).string() + ": lists " +
-                           example + " (" + std::to_string(repeated) + " of " +
-                           std::to_string(c.paths.size()) +
+      const fs::path list = c.layout == "folder"                           ? dir
+                            : c.layout.find("listed") != std::string::npos ? fs::path(c.order)
+                                                                           : dir / c.order;
+      c.warnings.push_back(list.string() + ": lists " + example + " (" + std::to_string(repeated) +
+                           " of " + std::to_string(c.paths.size()) +
                            " entries name an image listed more than once): each light needs its "
                            "own photograph");
     }
@@ -375,12 +380,14 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
   // Mask.
   if (!options.mask.empty()) {
     c.mask_path = options.mask;
+  } else if (!listed_mask.empty()) {
+    c.mask_path = listed_mask;
   } else if (Exists(dir / "mask.png")) {
     c.mask_path = (dir / "mask.png").string();
   } else {
     int best = 2;
     for (const std::string& name : files) {
-      const int rank = MaskRank(name);
+      const int rank = MaskNameRank(name);
       if (rank >= 0 && rank < best) {
         best = rank;
         c.mask_path = (dir / name).string();
@@ -391,6 +398,19 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
   for (const char* name : {"Normal_gt.mat", "normal.txt"}) {
     if (c.ground_truth_path.empty() && Exists(dir / name))
       c.ground_truth_path = (dir / name).string();
+  }
+  // What the folder holds beside the photos and is not read (UW's albedo picture, normals.dat
+  // and depths.dat; iphong's own outputs), so the user sees it was not taken for a photo.
+  {
+    std::set<std::string> used;
+    for (const std::string& path : c.paths) used.insert(fs::path(path).filename().string());
+    for (const std::string& name : files) {
+      const bool kind =
+          HasImageExtension(name) || Lower(fs::path(name).extension().string()) == ".dat";
+      if (kind && IsCompanionImage(name) && MaskNameRank(name) < 0 && !used.count(name) &&
+          (dir / name).string() != c.mask_path)
+        c.skipped.push_back(name);
+    }
   }
   if (Exists(dir / "material.json")) c.material_path = (dir / "material.json").string();
   if (Exists(dir / "render.json")) c.render_json = (dir / "render.json").string();

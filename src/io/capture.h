@@ -5,7 +5,9 @@
 //   DiLiGenT  filenames.txt names the images; light_directions.txt, light_intensities.txt,
 //             mask.png, Normal_gt.mat (or normal.txt), material.json beside it.
 //   RTI       a .lp file (RTIBuilder, Relight, RTIViewer) names the images and their lights.
-//   listed    a text file naming the images, one per line: <folder>.txt or images.txt (UW).
+//   listed    a text file naming the images, one per line (a count line first allowed, the mask
+//             among them taken as the mask): `images` when given, else <folder>.txt or
+//             images.txt here, else <folder>.txt one folder up (UW's archive).
 //   folder    every image file in the folder, in natural order ("cat.2" before "cat.10"; a
 //             plain `ls` puts cat.10 first and pairs every image with the wrong light).
 // The light file, unless named: light_directions.txt, lights.txt, lights.json or the one .lp in
@@ -31,9 +33,11 @@
 namespace iphong::io {
 
 struct CaptureOptions {
-  std::string lights;             // a light file; "" = find one
-  std::string intensities;        // "r g b" per light; "" = find one
-  std::string mask;               // a mask picture; "" = find one
+  std::string lights;       // a light file; "" = find one
+  std::string intensities;  // "r g b" per light; "" = find one
+  std::string mask;         // a mask picture; "" = find one
+  // A list of the photos in light order (io/image_list.h); "" = the layout's own.
+  std::string images;
   std::string encoding = "auto";  // "auto" (what the files say, else linear), "linear", "srgb"
   PixelRect crop;                 // in the files' pixels, applied first; width 0 = none
   int downscale = 1;              // then area averaging by this factor
@@ -62,6 +66,9 @@ struct CaptureFiles {
   // then the file's or, without one, those toward the positions from the object.
   NearLightFiles near;
   std::vector<std::string> warnings;
+  // Files beside the photos that look like a dataset's or iphong's companions (an albedo or
+  // normal picture, *.normals.dat) and were not read as photos.
+  std::vector<std::string> skipped;
 };
 
 // Throws std::runtime_error naming the file (and line) that is missing or wrong: no images, no
@@ -84,5 +91,14 @@ bool NaturalLess(const std::string& a, const std::string& b);
 
 // True for the extensions of the image formats iphong reads from capture folders.
 bool HasImageExtension(const std::string& name);
+
+// 0: "mask.*"; 1: "<x>.mask.*", "<x>_mask.*", "<x>-mask.*"; -1: not a mask's name (an image
+// file's name only).
+int MaskNameRank(const std::string& name);
+
+// Files of a capture folder that are not photographs: masks, ground truth and what iphong and
+// the datasets' tools write beside the photos (normals, depth, albedo, ... alone or as the last
+// part of the name: UW's buddha.albedo.tga).
+bool IsCompanionImage(const std::string& name);
 
 }  // namespace iphong::io

@@ -266,6 +266,12 @@ std::string DescribeDataset(const Dataset& d) {
   }
   text += "; ground truth " +
           (f.ground_truth_path.empty() ? std::string("none") : base(f.ground_truth_path));
+  if (!f.skipped.empty()) {
+    text += "; not read: ";
+    for (std::size_t i = 0; i < f.skipped.size() && i < 4; ++i)
+      text += (i ? ", " : "") + f.skipped[i];
+    if (f.skipped.size() > 4) text += " and " + std::to_string(f.skipped.size() - 4) + " more";
+  }
   return text;
 }
 

@@ -71,6 +71,63 @@ def test_uw_cat_runs_as_it_is_and_says_what_it_read(tmp_path):
     assert angle_between(tmp_path / "out" / "normals.exr", tmp_path / "ls-out" / "normals.exr") > 10
 
 
+def uw_as_shipped(root, obj="cat", listed=True):
+    """UW's archive as it is shipped (psmImages/): the photos, the mask and the companions
+    NAME.albedo.tga, NAME.normals.dat and NAME.depths.dat in psmImages/NAME/, lights.txt and
+    NAME.txt (a count line, then the photos and the mask as paths from the course's folder) in
+    psmImages/. The object is called buddha; its photos are UW's cat."""
+    psm = root / "psmImages"
+    folder = psm / "buddha"
+    folder.mkdir(parents=True)
+    link(UW / "lights.txt", psm / "lights.txt")
+    for i in range(12):
+        link(UW / obj / f"{obj}.{i}.tga", folder / f"buddha.{i}.tga")
+    link(UW / obj / f"{obj}.mask.tga", folder / "buddha.mask.tga")
+    link(UW / obj / f"{obj}.3.tga", folder / "buddha.albedo.tga")
+    (folder / "buddha.normals.dat").write_bytes(b"\0" * 64)
+    (folder / "buddha.depths.dat").write_bytes(b"\0" * 64)
+    if listed:
+        entries = [f"psmImages/buddha/buddha.{i}.tga" for i in range(12)]
+        (psm / "buddha.txt").write_text("12\n" + "\n".join(entries) +
+                                        "\npsmImages/buddha/buddha.mask.tga\n")
+    return folder
+
+
+@pytest.mark.parametrize("listed", [True, False])
+def test_uw_archive_as_shipped_runs_as_it_is(tmp_path, listed):
+    """The list one folder up (count line, paths from elsewhere, the mask last) or none: the
+    albedo picture is not a 13th photo, the companions are named as not read, and the normals
+    are those of UW's cat folder."""
+    folder = uw_as_shipped(tmp_path, listed=listed)
+    stdout, metrics = normals(folder, tmp_path / "out")
+    line = stdout.splitlines()[0]
+    if listed:
+        assert f"12 images (listed layout, {folder.parent / 'buddha.txt'}: " in line
+    else:
+        assert "12 images (folder layout, natural order: buddha.0.tga ... buddha.11.tga)" in line
+    assert "mask buddha.mask.tga" in line
+    assert line.endswith("not read: buddha.albedo.tga, buddha.depths.dat, buddha.normals.dat")
+    normals(UW / "cat", tmp_path / "cat")
+    assert angle_between(tmp_path / "out" / "normals.exr", tmp_path / "cat" / "normals.exr") < 1e-6
+
+
+def test_images_list_names_the_photos_and_a_count_mismatch_says_how(tmp_path):
+    folder = uw_as_shipped(tmp_path, listed=False)
+    listing = tmp_path / "order.txt"  # the user's own list, outside the data folder
+    listing.write_text("".join(f"buddha.{i}.tga\n" for i in range(12)))
+    stdout, _ = normals(folder, tmp_path / "out", "--images", listing)
+    assert f"listed layout, {listing}: buddha.0.tga ... buddha.11.tga" in stdout
+    listing.write_text("12\n" + "".join(f"buddha.{i}.tga\n" for i in range(11)))
+    code, _, err = run("normals", folder, "-o", tmp_path / "bad", "--images", listing)
+    assert code == 1 and err.strip() == (f"iphong: error: {listing}:1: says 12 images, but lists "
+                                         "11 photographs"), err
+    # Eleven photos and twelve lights: the advice names a flag, not a file to write into the data.
+    (folder / "buddha.11.tga").unlink()
+    code, _, err = run("normals", folder, "-o", tmp_path / "bad")
+    assert code == 1 and "give the images in light order with --images LIST" in err, err
+    assert "filenames.txt" not in err
+
+
 def crop_cat_run(tmp_path):
     out = tmp_path / "diligent-out"
     _, metrics = normals(CROP_CAT, out)
