@@ -207,10 +207,14 @@ inline solve::PhotometricData ToObservations(const FloatStack& images,
 inline MemoryLimit MemoryLimitFrom(const py::object& max_memory_gb) {
   MemoryLimit limit;
   limit.knob = "max_memory_gb=";
-  if (!max_memory_gb.is_none()) {
+  if (py::isinstance<py::str>(max_memory_gb)) {  // "16GB", "512MB": as Dask takes them
+    if (std::string m = ParseMemorySize(max_memory_gb.cast<std::string>(), &limit.bytes);
+        !m.empty())
+      throw std::invalid_argument("max_memory_gb: " + m);
+  } else if (!max_memory_gb.is_none()) {
     const double gb = ToNumber(max_memory_gb, "max_memory_gb");
-    if (!(gb > 0)) throw std::invalid_argument("max_memory_gb: expected a number > 0");
-    limit.bytes = static_cast<std::uint64_t>(gb * 1e9);
+    if (std::string m = MemorySizeFromGb(gb, &limit.bytes); !m.empty())
+      throw std::invalid_argument("max_memory_gb: " + m);
   }
   return limit;
 }

@@ -88,6 +88,11 @@ void BindCalibrate(py::module_& m) {
       [](const py::object& images_in, const py::object& mask_in, const py::object& circles,
          const std::string& sphere, const py::object& normals_in, const py::object& intrinsics,
          double saturation, int max_spheres, bool uniform_albedo, int threads) {
+        // The command line's ranges (--saturation, --spheres).
+        if (!(saturation > 0 && saturation <= 1))
+          throw std::invalid_argument("saturation: expected a number in (0, 1]");
+        if (max_spheres < 1 || max_spheres > 2)
+          throw std::invalid_argument("max_spheres: expected 1 or 2");
         const std::vector<ImageF> images = ToImages(images_in);
         std::vector<const ImageF*> pointers;
         for (const ImageF& image : images) pointers.push_back(&image);

@@ -410,7 +410,14 @@ void AddCalibrateCommand(CLI::App& app) {
   cmd->add_option("--saturation", o->saturation,
                   "Values at or above this are clipped (images read as 0-1; at most 1: not where a "
                   "float image passes 1)")
-      ->check(Positive())
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            double v = 0;
+            if (!CLI::detail::lexical_cast(text, v) || !(v > 0 && v <= 1))
+              return "must be a number in (0, 1] (got " + text + ")";
+            return "";
+          },
+          "(0, 1]"))
       ->capture_default_str();
   cmd->add_option("--mask", o->capture.options.mask,
                   "Mask picture of the sphere(s) or object (default: mask.png, mask.*, "

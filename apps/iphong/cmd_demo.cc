@@ -284,7 +284,9 @@ void AddDemoCommand(CLI::App& app) {
   cmd->add_option("-o,--output", options->output_dir,
                   "Output folder: new or empty, or an earlier demo output (replaced)")
       ->capture_default_str();
-  cmd->add_option("--size", options->size, "Sphere image size in pixels")->capture_default_str();
+  cmd->add_option("--size", options->size, "Sphere image size in pixels")
+      ->check(CLI::Range(8, 8192))
+      ->capture_default_str();
   AddThreadsOption(cmd, options->common);
   cmd->add_flag("-q,--quiet", options->common.quiet, "Print nothing but errors and warnings");
   cmd->callback([options] { RunDemo(*options); });

@@ -29,7 +29,7 @@ const CLI::Validator& Positive();
 // Flags most commands share.
 struct CommonOptions {
   int threads = 0;
-  double max_memory_gb = 0;  // 0 = three quarters of the machine's memory
+  std::uint64_t memory_limit_bytes = 0;  // 0 = three quarters of the machine's memory
   bool overwrite = false;
   bool quiet = false;  // nothing on stdout, no progress; errors and warnings still on stderr
   bool json = false;   // the run's summary as JSON on stdout, nothing else there
@@ -38,7 +38,7 @@ struct CommonOptions {
 
   MemoryLimit memory() const {
     MemoryLimit limit;
-    limit.bytes = static_cast<std::uint64_t>(max_memory_gb * 1e9);
+    limit.bytes = memory_limit_bytes;
     return limit;
   }
 };

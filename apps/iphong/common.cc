@@ -30,11 +30,19 @@ void AddThreadsOption(CLI::App* cmd, CommonOptions& common) {
 }
 
 void AddMemoryOption(CLI::App* cmd, CommonOptions& common) {
-  cmd->add_option("--memory-limit,--max-memory", common.max_memory_gb,
-                  "Memory to stay within, in GB (default: 3/4 of the machine's, or of ulimit -v): "
-                  "work that needs more is refused before it starts, except normals, which "
-                  "then reads and solves the capture in bands of rows that fit")
-      ->check(Positive());
+  cmd->add_option_function<std::string>(
+         "--memory-limit,--max-memory",
+         [&common](const std::string& text) {
+           std::uint64_t bytes = 0;
+           if (std::string m = ParseMemorySize(text, &bytes); !m.empty())
+             throw CLI::ValidationError("--memory-limit", m);
+           common.memory_limit_bytes = bytes;
+         },
+         "Memory to stay within: 16 or 16GB, 512MB, 1.5GiB (a plain number is GB; default: 3/4 "
+         "of the machine's, or of ulimit -v): work that needs more is refused before it starts "
+         "(exit 3), except normals, which then reads and solves the capture in bands of rows "
+         "that fit")
+      ->type_name("SIZE");
 }
 
 void AddOverwriteOption(CLI::App* cmd, CommonOptions& common) {

@@ -26,6 +26,14 @@ struct MemoryLimit {
 // the estimates' slack.
 std::uint64_t DefaultMemoryLimitBytes();
 
+// A memory size as people write it: "16", "16GB", "16 GB", "16G", "512M", "512MB", "1.5GiB",
+// "800k", "2e9B", any case. A plain number is GB (--memory-limit's unit); k, M, G, T are decimal
+// (as Dask reads "16GB"), KiB, MiB, GiB, TiB binary, B bytes. Between one byte and 1e18 bytes
+// (1e9 GB). Returns "" and sets *bytes, or says what is wrong.
+std::string ParseMemorySize(const std::string& text, std::uint64_t* bytes);
+// The same for a number of GB (Python's max_memory_gb=).
+std::string MemorySizeFromGb(double gb, std::uint64_t* bytes);
+
 // "1.2 GB", "340 MB", "12 kB".
 std::string FormatBytes(double bytes);
 

@@ -173,7 +173,7 @@ CameraIntrinsics ParseCameraJson(const std::string& text, const std::string& sou
   const std::set<std::string> known = {"fx", "fy", "cx", "cy", "pixel_size"};
   if (ignored) {
     for (const auto& item : document.items()) {
-      if (!known.count(item.key())) ignored->push_back(item.key());
+      if (!known.count(item.key())) ignored->push_back(nlohmann::json(item.key()).dump());
     }
   }
   CameraIntrinsics c;
@@ -236,6 +236,12 @@ void NormalizeDirections(std::vector<Vec3d>& directions, const std::string& sour
     const double scale = d.cwiseAbs().maxCoeff();
     if (!(scale > 0)) Fail(source, "zero light direction", line);
     const double norm = (d / scale).norm() * scale;
+    // A denormal or near-zero vector has no direction worth normalizing: 1e-320 0 0 is a slip.
+    if (norm < 1e-6) {
+      char length[32];
+      std::snprintf(length, sizeof length, "%.3g", norm);
+      Fail(source, std::string("light direction has length ") + length + ": not a direction", line);
+    }
     if (std::abs(norm - 1) > 1e-3 && warnings) {
       char length[32];
       std::snprintf(length, sizeof length, "%.6g", norm);

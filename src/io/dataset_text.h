@@ -44,7 +44,8 @@ std::vector<double> ParseScalars(const std::string& text, const std::string& sou
 // in OpenCV's convention (from the top-left, rows down, pixel centres at integers), or iphong's
 // {"pixel_size": …} (mm per pixel) for an orthographic camera centred on the image. Returned in
 // iphong's pixel convention (centres at col + 0.5, row + 0.5: cx + 0.5). Other keys are left
-// alone (other tools write "width", "distortion" …) and named in `ignored`.
+// alone (other tools write "width", "distortion" …) and named in `ignored`, JSON-quoted (a key
+// may hold any character, a line break among them).
 struct CameraIntrinsics {
   bool perspective = true;
   double fx = 0, fy = 0, cx = 0, cy = 0;  // iphong's convention

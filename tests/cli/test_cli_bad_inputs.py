@@ -95,6 +95,12 @@ def zero_direction(ds):
     return 1, r"zero light direction", "ds/light_directions.txt:5"
 
 
+def denormal_direction(ds):
+    """1e-320 0 0 used to be normalized to (1, 0, 0): a slip, not a direction."""
+    replace_line(ds / "light_directions.txt", 2, "1e-320 0 0")
+    return 1, r"light direction has length 1e-320: not a direction", "ds/light_directions.txt:3"
+
+
 def garbage_light_file(ds):
     (ds / "light_directions.txt").write_bytes(bytes(range(256)) * 4)
     return 1, r"expected 3 numbers|not a text file", "ds/light_directions.txt"
@@ -225,7 +231,8 @@ def one_image_unknown_albedo(ds):
 
 
 DATASET_CASES = [
-    short_light_file, nan_light, huge_intensity, zero_direction, garbage_light_file,
+    short_light_file, nan_light, huge_intensity, zero_direction, denormal_direction,
+    garbage_light_file,
     coplanar_lights, black_mask,
     fifo_light_file, folder_as_light_file, empty_filenames, missing_filenames, missing_image,
     zero_count_lp, lp_names_a_missing_image, two_lp_files,
@@ -304,12 +311,43 @@ def small_height(tmp_path_factory):
     (["eval", "ds/normals.exr", "ds", "--mask", "small_mask.png"], 1,
      r"small_mask\.png: is 20x20, the normal maps are 96x96"),
     (["render", "nowhere.json", "-o", "out"], 1, r"nowhere\.json: no such file"),
+    (["demo", "--size", "1000000", "-o", "out"], 2, r"--size: Value 1000000 not in range 8 to 8192"),
+    (["calibrate-lights", "ds", "--normals", "ds/normals.exr", "-o", "out", "--saturation", "2"], 2,
+     r"--saturation: must be a number in \(0, 1\] \(got 2\)"),
 ])
 def test_bad_command_line(rendered, small_height, tmp_path, args, code, pattern):
     user_copy(rendered, tmp_path / "ds")
     (tmp_path / "small_mask.png").write_bytes(grey_png(20, 20))
     shutil.copy(small_height, tmp_path / "small.exr")
     assert_refused(tmp_path, args, code, pattern, cwd=tmp_path, timeout=60)
+
+
+MEMORY_COMMANDS = [
+    ["normals", "ds", "-o", "out"],
+    ["render", str(FIXTURES / "scenes" / "photometric_sphere.json"), "-o", "out"],
+    ["integrate", "ds/normals.exr", "-o", "out"],
+    ["relight", "ds", "--light", "0,0,1", "-o", "relit.png"],
+    ["fit-material", "ds", "--normals", "ds/normals.exr", "-o", "out"],
+    ["calibrate-lights", "ds", "--normals", "ds/normals.exr", "-o", "out"],
+    ["eval", "ds/normals.exr", "ds"],
+]
+
+
+@pytest.mark.parametrize("args", MEMORY_COMMANDS, ids=lambda a: a[0])
+def test_memory_limit_takes_units_and_refuses_what_no_work_fits(rendered, tmp_path, args):
+    """--memory-limit as people write it (16GB, 512M; plain numbers are GB). A limit below a byte
+    used to truncate to 0, "unset", and the work ran; now it is a usage error (exit 2), and a limit
+    no work fits is exit 3 with the figure, for every command, with nothing written."""
+    user_copy(rendered, tmp_path / "ds")
+    assert_refused(tmp_path, args + ["--memory-limit", "1e-12"], 2,
+                   r"--memory-limit: '1e-12' is less than one byte", cwd=tmp_path)
+    assert_refused(tmp_path, args + ["--memory-limit", "1e308"], 2,
+                   r"--memory-limit: '1e308' is more than 1e9 GB", cwd=tmp_path)
+    assert_refused(tmp_path, args + ["--memory-limit", "100B"], 3,
+                   r"needs \d+ [kM]B, more than the memory limit of 100 B \(raise it with "
+                   r"--memory-limit\)", cwd=tmp_path)
+    code, _, err = run(*args, "--memory-limit", "512M", cwd=tmp_path)
+    assert code == 0, err
 
 
 @pytest.mark.skipif("ASAN_OPTIONS" in os.environ,

@@ -15,6 +15,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size);
 
+#include "fuzz_parsers.h"
+
 namespace {
 namespace fs = std::filesystem;
 
@@ -146,11 +148,23 @@ int main(int argc, char** argv) {
     LLVMFuzzerTestOneInput(reinterpret_cast<const std::uint8_t*>(input.data()), input.size());
   };
   for (const std::string& seed : seeds) run(seed);
+  long per_parser[kFuzzParsers] = {};
   for (long i = 0; i < iterations; ++i) {
     std::string input = Mutate(seeds[rng() % seeds.size()], rng);
-    if (rng() % 4 == 0) input = Mutate(input, rng);  // further from the seeds
-    input[0] = static_cast<char>(rng() % 6);         // any parser, any text
+    if (rng() % 4 == 0) input = Mutate(input, rng);             // further from the seeds
+    const int parser = static_cast<int>(rng() % kFuzzParsers);  // any parser, any text
+    input[0] = static_cast<char>(parser);
+    ++per_parser[parser];
     run(input);
+  }
+  // Every parser must have been fed mutations (a modulus smaller than the parsers' count once
+  // left the .lp and AliceVision readers unfuzzed here).
+  for (int p = 0; p < kFuzzParsers && iterations >= 100 * kFuzzParsers; ++p) {
+    if (per_parser[p] < iterations / (4 * kFuzzParsers)) {
+      std::fprintf(stderr, "fuzz_driver: parser %d got %ld of %ld mutations\n", p, per_parser[p],
+                   iterations);
+      return 1;
+    }
   }
   std::printf("fuzz_driver: %zu seeds and %ld mutations, no finding\n", seeds.size(), iterations);
   return 0;

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "fuzz_parsers.h"
 #include "io/dataset_text.h"
 #include "io/scene_file.h"
 
@@ -35,7 +36,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       "normal.txt",          "material.json",        "scene.json",
       "capture.lp",          "lights.json",          "camera.json",
       "light_anisotropy.txt"};
-  const int parser = data[0] % 10;
+  static_assert(sizeof kSources / sizeof kSources[0] == kFuzzParsers);
+  const int parser = data[0] % kFuzzParsers;
   const std::string source = kSources[parser];
   try {
     using namespace iphong::io;

@@ -41,8 +41,14 @@ def test_one_image_is_refused_when_its_global_solve_would_not_fit():
                                          r"more than the memory limit of 1.0 GB \(raise it with "
                                          r"max_memory_gb=\)"):
         iphong.estimate_normals(big, [[0, 0, 1]], material={"kd": 0.5}, max_memory_gb=1)
-    with pytest.raises(ValueError, match="max_memory_gb: expected a number > 0"):
-        iphong.estimate_normals(big[:, :8, :8], [[0, 0, 1]], material={"kd": 0.5}, max_memory_gb=0)
+    for bad, why in ((0, "must be a size > 0"), (1e-12, "is less than one byte"),
+                     (1e308, "is more than 1e9 GB"), ("16XB", "has an unknown unit 'xb'")):
+        with pytest.raises(ValueError, match=f"max_memory_gb: .*{why}"):
+            iphong.estimate_normals(big[:, :8, :8], [[0, 0, 1]], material={"kd": 0.5},
+                                    max_memory_gb=bad)
+    # Sizes as Dask writes them: "512MB" is half a GB, too little for 16 GB.
+    with pytest.raises(ValueError, match=r"more than the memory limit of 512 MB"):
+        iphong.estimate_normals(big, [[0, 0, 1]], material={"kd": 0.5}, max_memory_gb="512MB")
     small = iphong.estimate_normals(big[:, :16, :16], [[0, 0, 1]], material={"kd": 0.5},
                                     max_memory_gb=1)
     # 0.5 = kd 0.5 x N.L: every normal faces the light, (0, 0, 1).
@@ -110,3 +116,11 @@ def test_coplanar_lights_are_an_error():
     lights = [[np.cos(a), 0, np.sin(a)] for a in (0.3, 0.6, 0.9, 1.2)]
     with pytest.raises(ValueError, match="lie in one plane"):
         iphong.estimate_normals(np.ones((4, 4, 4, 3), np.float32), lights)
+
+
+def test_calibrate_lights_keeps_the_command_lines_ranges():
+    images = np.full((3, 8, 8, 3), 0.5, np.float32)
+    with pytest.raises(ValueError, match=r"max_spheres: expected 1 or 2"):
+        iphong.calibrate_lights(images, max_spheres=3)
+    with pytest.raises(ValueError, match=r"saturation: expected a number in \(0, 1\]"):
+        iphong.calibrate_lights(images, saturation=2)
