@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
@@ -20,12 +21,25 @@ namespace {
 // The process's one console: set once in SetUpConsole, before any other thread exists.
 FILE* own_stderr = stderr;
 bool own_stderr_tty = false;
+// Set by the signal watcher before it removes the outputs: from then on the other threads'
+// errors (a writer whose staging folder is gone) are the interrupt's, not the user's.
+std::atomic<bool> interrupted{false};
 
 void WaitForSignals(sigset_t signals) {
   int sig = 0;
   if (sigwait(&signals, &sig) != 0) return;
-  io::AbandonOutputFolders();
-  std::fprintf(Err(), "iphong: interrupted (%s); unfinished output removed\n", strsignal(sig));
+  interrupted = true;
+  const io::AbandonReport report = io::AbandonOutputFolders();
+  if (report.complete.empty()) {
+    std::fprintf(Err(), "iphong: interrupted (%s); %s\n", strsignal(sig),
+                 report.removed ? "unfinished output removed" : "nothing was written");
+  } else {
+    std::string done;
+    for (const std::string& t : report.complete) done += (done.empty() ? "" : ", ") + t;
+    std::fprintf(Err(), "iphong: interrupted (%s) after the output was complete: %s%s\n",
+                 strsignal(sig), OneLine(done).c_str(),
+                 report.removed ? " (other unfinished output removed)" : "");
+  }
   std::fflush(Err());
   ::signal(sig, SIG_DFL);
   sigset_t one;
@@ -55,6 +69,7 @@ void SetUpConsole() {
   own_stderr_tty = ::isatty(::fileno(own_stderr));
   // An exception nobody caught is a bug, and still gets one line.
   std::set_terminate([] {
+    if (interrupted) AwaitInterrupt();
     std::string what = "unknown";
     if (auto p = std::current_exception()) {
       try {
@@ -84,6 +99,13 @@ void SetUpConsole() {
 }
 
 FILE* Err() { return own_stderr; }
+
+bool Interrupted() { return interrupted; }
+
+void AwaitInterrupt() {
+  // The watcher ends the process with the signal once the outputs are removed.
+  for (;;) ::pause();
+}
 
 bool ErrIsTerminal() { return own_stderr_tty; }
 

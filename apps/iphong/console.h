@@ -21,7 +21,12 @@ namespace iphong::cli {
 // Call first in main, before any thread starts (the signal mask is inherited).
 void SetUpConsole();
 
-FILE* Err();                            // iphong's stderr
+FILE* Err();  // iphong's stderr
+// True once SIGINT, SIGTERM or SIGHUP arrived: the watcher thread removes the unfinished
+// outputs, says so and ends the process with the signal. The main thread then waits for it
+// (AwaitInterrupt) instead of reporting the errors the removal causes in the writers.
+bool Interrupted();
+[[noreturn]] void AwaitInterrupt();
 bool ErrIsTerminal();                   // progress is shown only on a terminal
 void Warn(const std::string& message);  // "iphong: warning: MESSAGE"
 

@@ -16,6 +16,7 @@ std::string ParsedCommand(const CLI::App& app) {
 }
 
 int Fail(const std::string& message, int code) {
+  if (iphong::cli::Interrupted()) iphong::cli::AwaitInterrupt();
   std::fprintf(iphong::cli::Err(), "iphong: error: %s\n",
                iphong::OneLine(iphong::io::WithoutStagingNames(message)).c_str());
   return code;
@@ -75,5 +76,7 @@ int main(int argc, char** argv) {
     code = Fail(e.what(), iphong::cli::kExitInput);
   }
   if (std::fflush(stdout) != 0 && code == 0) code = iphong::cli::kExitOutput;
+  // An interrupt that came as the run finished: its watcher says what is left and exits.
+  if (iphong::cli::Interrupted()) iphong::cli::AwaitInterrupt();
   return code;
 }

@@ -26,20 +26,23 @@ std::string Quote(const std::string& command) { return "`iphong " + command + "`
 // is the one piece of process-wide state in io; it holds only cleanup callbacks.
 struct Registry {
   std::mutex mutex;
-  std::map<const void*, std::function<void()>> abandon;
+  std::map<const void*, std::function<bool()>> abandon;  // false: already committed
+  std::map<const void*, std::string> targets;
 };
 Registry& Outputs() {
   // Never destroyed: a signal that arrives while the process exits still finds it whole.
   static Registry* registry = new Registry;
   return *registry;
 }
-void Register(const void* key, std::function<void()> abandon) {
+void Register(const void* key, const std::string& target, std::function<bool()> abandon) {
   std::lock_guard<std::mutex> lock(Outputs().mutex);
   Outputs().abandon[key] = std::move(abandon);
+  Outputs().targets[key] = target;
 }
 void Unregister(const void* key) {
   std::lock_guard<std::mutex> lock(Outputs().mutex);
   Outputs().abandon.erase(key);
+  Outputs().targets.erase(key);
 }
 
 bool ReservedName(const std::string& name) {
@@ -59,7 +62,7 @@ OutputFolder::OutputFolder(const std::string& target, OutputFolderOptions option
     if (lock_fd_ >= 0) ::close(lock_fd_);
     throw;
   }
-  Register(this, [this] { Abandon(); });
+  Register(this, target_display_, [this] { return Abandon(); });
 }
 
 OutputFolder::~OutputFolder() {
@@ -325,7 +328,22 @@ void OutputFolder::RemoveStaging() {
   std::error_code ignored;
   // After the journal, what is staged is the new state: a failed or interrupted commit is
   // finished from it by the next run, so it stays.
-  if (!staging_.empty() && !journaled_) fs::remove_all(staging_, ignored);
+  if (!staging_.empty() && !journaled_) {
+    // Writer threads may still be creating files in it (an interrupt arrives mid-write, and
+    // remove_all then meets a file made after it listed the folder, and leaves the folder).
+    // Moved aside under a fresh staging name first, the paths they hold lead nowhere, so nothing
+    // new appears in what is removed; were anything left, the next run removes it by its name.
+    fs::path doomed = staging_;
+    const std::string name = staging_.filename().string();
+    const std::size_t at = name.find(kPartial);
+    if (at != std::string::npos) {
+      const fs::path aside =
+          staging_.parent_path() / (name.substr(0, at + std::strlen(kPartial)) + PartialSuffix());
+      if (::rename(staging_.c_str(), aside.c_str()) == 0) doomed = aside;
+    }
+    for (int attempt = 0; attempt < 3 && fs::exists(doomed, ignored); ++attempt)
+      fs::remove_all(doomed, ignored);
+  }
   staging_.clear();
   for (auto it = created_parents_.rbegin(); it != created_parents_.rend(); ++it) {
     if (::rmdir(it->c_str()) != 0) break;
@@ -333,16 +351,25 @@ void OutputFolder::RemoveStaging() {
   created_parents_.clear();
 }
 
-void OutputFolder::Abandon() {
+bool OutputFolder::Abandon() {
   std::lock_guard<std::mutex> lock(*mutex_);  // waits for a Commit in progress to finish
-  if (committed_ || abandoned_) return;
-  RemoveStaging();
+  if (committed_) return false;
+  if (!abandoned_) RemoveStaging();
   abandoned_ = true;
+  return true;
 }
 
-void AbandonOutputFolders() {
+AbandonReport AbandonOutputFolders() {
   std::lock_guard<std::mutex> lock(Outputs().mutex);
-  for (auto& [key, abandon] : Outputs().abandon) abandon();
+  AbandonReport report;
+  for (auto& [key, abandon] : Outputs().abandon) {
+    if (abandon()) {
+      ++report.removed;
+    } else {
+      report.complete.push_back(Outputs().targets[key]);
+    }
+  }
+  return report;
 }
 
 void WriteSingleOutputFile(const std::string& command, const std::string& path, bool overwrite,
@@ -392,10 +419,12 @@ void WriteSingleOutputFile(const std::string& command, const std::string& path, 
       if (!path.empty()) ::unlink(path.c_str());
     }
   } partial{temp};
-  Register(&partial, [&] {
+  Register(&partial, path, [&] {
     std::lock_guard<std::mutex> lock(mutex);
-    if (!partial.path.empty()) ::unlink(partial.path.c_str());
+    if (partial.path.empty()) return false;  // in place: complete
+    ::unlink(partial.path.c_str());
     partial.path.clear();
+    return true;
   });
   write(temp.string());
   std::lock_guard<std::mutex> lock(mutex);

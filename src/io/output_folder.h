@@ -65,7 +65,7 @@ class OutputFolder {
   void CommitFresh();
   void CommitInPlace(const std::map<std::string, ManifestEntry>& written);
   void RemoveStaging();
-  void Abandon();  // from AbandonOutputFolders
+  bool Abandon();  // from AbandonOutputFolders: false when the output was already committed
 
   OutputFolderOptions options_;
   std::string target_display_;     // as the user wrote it, for messages
@@ -84,8 +84,13 @@ class OutputFolder {
 
 // Removes the staging folders (and partial single files) of every output not yet committed, and
 // waits for one being committed to finish. For the command line's SIGINT/SIGTERM handling; safe
-// from any thread.
-void AbandonOutputFolders();
+// from any thread. Says what it did: how many unfinished outputs it removed, and which outputs
+// were complete (committed) by then, so the interrupt's message is true.
+struct AbandonReport {
+  std::size_t removed = 0;
+  std::vector<std::string> complete;  // targets as the user wrote them
+};
+AbandonReport AbandonOutputFolders();
 
 // Finishes a commit into `folder` that was cut off (its journal is present). Readers of an
 // iphong output folder call this first, so they never see half of one run and half of another.

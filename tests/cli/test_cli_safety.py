@@ -349,6 +349,60 @@ def test_interrupt_removes_the_unfinished_output(slow_dataset, tmp_path, sig):
     assert snapshot(tmp_path) == before
 
 
+@pytest.fixture(scope="module")
+def busy_scene(tmp_path_factory):
+    """A per-light render that writes 32 pictures over a second or so, from several threads."""
+    folder = tmp_path_factory.mktemp("busy")
+    scene = folder / "scene.json"
+    scene.write_text(json.dumps({
+        "width": 320, "height": 320, "ambient": [1, 1, 1],
+        "lights": [{"type": "hemisphere", "count": 32, "min_elevation_deg": 20}],
+        "objects": [{"shape": "sphere", "radius": 0.85, "subdivisions": 5,
+                     "material": {"ka": 0.02, "kd": [0.7, 0.5, 0.3], "ks": 0.4,
+                                  "shininess": 20}}],
+        "output": {"format": "png"}}))
+    started = time.monotonic()
+    code, _, err = run("render", scene, "-o", folder / "timing", "--per-light")
+    assert code == 0, err
+    return scene, time.monotonic() - started
+
+
+@pytest.mark.parametrize("overwrite", [False, True], ids=["new", "overwrite"])
+def test_interrupting_writers_at_any_point_leaves_the_folder_as_it_was(busy_scene, tmp_path,
+                                                                         overwrite):
+    """Signals at eight points of a render whose threads are writing pictures: the staging folder
+    used to survive when a writer created a file while it was being removed (7 of 24 runs). Now
+    every run leaves the folder as it was (or, when the signal came after the commit, complete and
+    said so), prints one line and ends with the signal."""
+    scene, duration = busy_scene
+    out = tmp_path / "out"
+    if overwrite:
+        code, _, err = run("render", scene, "-o", out, "--per-light")
+        assert code == 0, err
+    signals = [signal.SIGINT, signal.SIGTERM, signal.SIGHUP]
+    for i, fraction in enumerate([0.35, 0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95]):
+        sig = signals[i % 3]
+        before = snapshot(tmp_path)
+        process = start("render", scene, "-o", out, "--per-light",
+                        *(["--overwrite"] if overwrite else []))
+        time.sleep(fraction * duration)
+        process.send_signal(sig)
+        _, err = process.communicate(timeout=60)
+        if process.returncode != 0:  # 0: it finished first
+            check_interrupted(process, sig, err, before, tmp_path, out)
+        if not overwrite:
+            shutil.rmtree(out, ignore_errors=True)
+
+
+def check_interrupted(process, sig, err, before, tmp_path, out):
+    assert process.returncode == -sig, err
+    assert err.count("\n") == 1 and err.startswith("iphong: interrupted"), err
+    if "after the output was complete" in err:
+        assert (out / "render.json").exists()
+    else:
+        assert snapshot(tmp_path) == before, (sig, err)
+
+
 def test_interrupt_during_overwrite_keeps_the_old_output(slow_dataset, tmp_path):
     out = tmp_path / "out"
     code, _, err = run("normals", slow_dataset, "-o", out, "--fast")
