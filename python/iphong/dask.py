@@ -35,7 +35,8 @@ def _solve_block(images, mask, light_directions, light_intensities, plan, thread
 
 def estimate_normals(images, light_directions, light_intensities=None, mask=None, model=None,
                      material=None, discard_dark=0.3, discard_bright=0.1, fast=False,
-                     shadow_threshold=0.1, plan_sample=131072, threads_per_block=1):
+                     shadow_threshold=0.1, plan_sample=131072, threads_per_block=1, *,
+                     encoding=None):
     """iphong.estimate_normals on a dask.array (K, H, W, 3), chunked over H and W only.
 
     mask: (H, W) bool (numpy or dask) or None (every pixel). Returns a dict: normals, albedo,
@@ -43,6 +44,11 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     model, shininess, ambient_term and the plan (decided now, on the plan sample); ks, a lazy
     (3,) array: the median ks of the plan sample's solved pixels that kept the lobe, as
     estimate_normals reports it.
+    Lights are distant: the same as iphong.estimate_normals with light_distance='inf' (an
+    effective light distance is not searched here; the in-memory run searches one by default and
+    may take it). Integer images (uint8, uint16) need encoding='linear' or 'srgb', as in
+    iphong.estimate_normals (scaled to [0, 1], the sRGB curve undone; each block lazily); float
+    images with encoding='srgb' are linearized.
     Raises ValueError for inconsistent shapes or chunks over K or the colour axis.
     """
     import dask
@@ -55,8 +61,22 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     if len(images.chunks[0]) != 1 or len(images.chunks[3]) != 1:
         raise ValueError("images: chunk over H and W only (every block needs all K images and "
                          "all 3 channels): use images.rechunk({0: -1, 3: -1})")
+    if encoding not in (None, "linear", "srgb"):
+        raise ValueError(f"encoding: expected None, 'linear' or 'srgb', got {encoding!r}")
+    if images.dtype.kind not in "fiu" or images.dtype == bool:
+        raise TypeError(f"images: expected numbers, got an array of {images.dtype}")
+    if images.dtype.kind in "iu":
+        top = _np.iinfo(images.dtype).max
+        if encoding is None:  # the same refusal as iphong.estimate_normals
+            raise ValueError(
+                f"images: {images.dtype} values (0-{top}) would be used unscaled; pass floats in "
+                f"[0, 1] (images / {top}), or encoding='linear' or 'srgb' to have them scaled "
+                "(and the sRGB curve undone)")
+        images = images.astype(_np.float32) / _np.float32(top)
     if images.dtype != _np.float32:
         images = images.astype(_np.float32)
+    if encoding == "srgb":
+        images = images.map_blocks(_core._srgb_to_linear, dtype=_np.float32)
     if mask is None:
         mask_np = _np.ones((h, w), bool)
     else:

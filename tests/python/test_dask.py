@@ -131,3 +131,27 @@ def test_process_datasets_reports_each(tmp_path):
     assert not (tmp_path / "out" / "broken").exists()
     with pytest.raises(ValueError, match="same folder name"):
         idask.process_datasets([good, good], tmp_path / "out2")
+
+
+def test_integer_images_need_an_encoding_as_in_estimate_normals(capture):
+    """uint8 images were taken unscaled (albedo 255 times the float run's); now they are refused
+    without encoding=, as iphong.estimate_normals refuses them, and with it the two agree value for
+    value."""
+    codes = np.clip(np.round(capture["images"] * 255), 0, 255).astype(np.uint8)
+    images = da.from_array(codes, chunks=(-1, 20, 24, -1))
+    args = (capture["light_directions"], capture["light_intensities"], capture["mask"])
+    with pytest.raises(ValueError, match=r"uint8 values \(0-255\) would be used unscaled"):
+        idask.estimate_normals(images, *args)
+    with pytest.raises(ValueError, match=r"uint8 values \(0-255\) would be used unscaled"):
+        iphong.estimate_normals(codes, *args)
+    lazy = idask.estimate_normals(images, *args, encoding="linear")
+    eager = iphong.estimate_normals(codes, *args, encoding="linear")
+    albedo, normals = dask.compute(lazy["albedo"], lazy["normals"], scheduler="threads")
+    np.testing.assert_array_equal(normals, eager["normals"])
+    np.testing.assert_array_equal(albedo, eager["albedo"])
+    # 'srgb' undoes the curve block by block: the same as handing over linearized floats.
+    lazy = idask.estimate_normals(images, *args, encoding="srgb")
+    floats = iphong._core._srgb_to_linear(codes.astype(np.float32) / 255)
+    same = idask.estimate_normals(da.from_array(floats, chunks=(-1, 20, 24, -1)), *args)
+    np.testing.assert_array_equal(*dask.compute(lazy["normals"], same["normals"],
+                                                scheduler="threads"))
