@@ -62,6 +62,8 @@ void BindIo(py::module_& m) {
         const ImageF normals = ToImage(normals_in, "normals");
         const Mask mask = mask_in.is_none() ? NonZeroPixels(normals)
                                             : ToMask(mask_in, normals.width, normals.height);
+        // NaN or non-unit normals: the same refusal as the commands that read maps.
+        io::RequireUnitNormals(normals, &mask, "normals");
         const std::string ext = io::LowerExtension(path);
         if (ext != ".exr" && ext != ".png" && ext != ".tif" && ext != ".tiff") {
           throw std::invalid_argument(path +

@@ -88,6 +88,23 @@ void BindMaterial(py::module_& m) {
                                       albedo + "')");
         }
         if (options.albedo == material::AlbedoMode::kPerRegion) {
+          // Float labels are taken when whole: a NaN cast to int is undefined (it became a
+          // negative label, "left out", without a word).
+          const auto exact =
+              py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(regions);
+          if (!exact) PyErr_Clear();
+          if (exact) {
+            for (py::ssize_t i = 0; i < exact.size(); ++i) {
+              const double v = exact.data()[i];
+              if (!std::isfinite(v) || v != std::floor(v) || std::abs(v) > 2e9) {
+                throw std::invalid_argument(
+                    "regions: labels must be whole numbers; the value at row " +
+                    std::to_string(exact.ndim() == 2 ? i / exact.shape(1) : 0) + ", column " +
+                    std::to_string(exact.ndim() == 2 ? i % exact.shape(1) : i) + " is " +
+                    std::to_string(v));
+              }
+            }
+          }
           auto labels =
               py::array_t<int, py::array::c_style | py::array::forcecast>::ensure(regions);
           if (!labels) PyErr_Clear();

@@ -94,7 +94,7 @@ solve::PhotometricData CaptureBands::ReadBand(int y0, int y1, bool count) {
       try {
         const ImageF band = internal::WorkingRows(
             s.p, s.readers[j]->ReadRows(offset_y + file_y0, offset_y + file_y0 + file_rows), 0,
-            file_rows, file_y0, scale, count ? &d.image_counts[j] : nullptr);
+            file_rows, file_y0, scale, count ? &d.image_counts[j] : nullptr, d.files.paths[j]);
         if (auto m = solve::GatherImage(data, static_cast<int>(j), band.pixels.data());
             !m.empty()) {
           errors[j] = d.files.paths[j] + ": rows " + std::to_string(offset_y + file_y0) + ".." +

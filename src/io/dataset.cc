@@ -206,11 +206,29 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
 }
 
 ImageF WorkingRows(const Prepared& p, ImageF rows, int skip, int count, int file_y0, int downscale,
-                   ImageCounts* counts) {
+                   ImageCounts* counts, const std::string& path) {
   rows = ToRgb(std::move(rows));
   if (p.crop.width > 0 || skip > 0 || count != rows.height) {
     rows = CropImage(rows, {p.crop.width > 0 ? p.crop.x : 0, skip,
                             p.crop.width > 0 ? p.crop.width : rows.width, count});
+  }
+  {
+    // Every reader of captures (CLI, bands, Python, calibration) meets a NaN here, named, rather
+    // than in whatever it computes from it.
+    const std::size_t first = static_cast<std::size_t>(file_y0) * rows.width;
+    std::size_t bad = 0, at = 0;
+    for (std::size_t q = 0; q < rows.pixel_count(); ++q) {
+      if (!p.file_mask.inside[first + q]) continue;
+      const float* v = rows.pixels.data() + 3 * q;
+      if (std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])) continue;
+      if (bad++ == 0) at = q;
+    }
+    if (bad > 0) {
+      const int x0 = p.crop.width > 0 ? p.crop.x : 0, y0 = p.crop.width > 0 ? p.crop.y : 0;
+      Fail(path, std::to_string(bad) + " pixel(s) inside the mask are not finite (NaN or " +
+                     "infinite; the first at column " + std::to_string(x0 + at % rows.width) +
+                     ", row " + std::to_string(y0 + file_y0 + at / rows.width) + ")");
+    }
   }
   if (counts) {
     // Saturation is a property of the stored code values: counted before any averaging.
@@ -241,7 +259,8 @@ ImageF ReadWorkingImage(const Prepared& p, std::size_t j, const std::string& ref
   const int rows = p.crop.width > 0 ? p.crop.height : d.file_height;
   return internal::WorkingRows(
       p, ReadDatasetImage(d.files.paths[j], d.file_width, d.file_height, reference, options.memory),
-      p.crop.width > 0 ? p.crop.y : 0, rows, 0, options.capture.downscale, counts);
+      p.crop.width > 0 ? p.crop.y : 0, rows, 0, options.capture.downscale, counts,
+      d.files.paths[j]);
 }
 
 }  // namespace

@@ -27,8 +27,9 @@ ImageF ToRgb(ImageF image);
 // Decoded rows of a capture file (full width) brought to the working size, as every reader of
 // captures does: to RGB; rows [skip, skip + count) and the crop's columns kept; the clipped and
 // black pixels counted into `counts` (when given) inside the file mask, whose row `file_y0` the
-// first kept row is (cropped frame); sRGB linearized; downscaled.
+// first kept row is (cropped frame); sRGB linearized; downscaled. A value that is not finite
+// inside the file mask throws std::runtime_error naming `path`, the count and the first pixel.
 ImageF WorkingRows(const Prepared& p, ImageF rows, int skip, int count, int file_y0, int downscale,
-                   ImageCounts* counts);
+                   ImageCounts* counts, const std::string& path);
 
 }  // namespace iphong::io::internal

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "io/dataset_text.h"
@@ -154,10 +155,25 @@ void WriteDatasetFiles(OutputFolder& out, const std::string& prefix, const Datas
   const std::size_t k = d.images.size();
   if (k == 0) throw std::invalid_argument("a dataset needs at least one image");
   const ImageF& first = *d.images[0];
-  for (const ImageF* image : d.images) {
+  for (std::size_t j = 0; j < k; ++j) {
+    const ImageF* image = d.images[j];
     if (image->width != first.width || image->height != first.height || image->channels != 3) {
       throw std::invalid_argument("the images must all be " + SizeText(first.width, first.height) +
                                   " RGB");
+    }
+    // What LoadDataset would refuse is not written: a NaN in a float image is kept by the file.
+    std::size_t bad = 0, at = 0;
+    for (std::size_t p = 0; p < image->pixel_count(); ++p) {
+      const float* v = image->pixels.data() + 3 * p;
+      if (std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])) continue;
+      if (bad++ == 0) at = p;
+    }
+    if (bad > 0) {
+      throw std::invalid_argument("image " + std::to_string(j + 1) + " has " + std::to_string(bad) +
+                                  " pixel(s) that are not finite (NaN or infinite; the first at "
+                                  "column " +
+                                  std::to_string(at % image->width) + ", row " +
+                                  std::to_string(at / image->width) + ")");
     }
   }
   if (d.light_directions.size() != k ||
@@ -176,6 +192,7 @@ void WriteDatasetFiles(OutputFolder& out, const std::string& prefix, const Datas
     throw std::invalid_argument("the ground truth must be " + SizeText(first.width, first.height) +
                                 " x 3");
   }
+  if (d.normal_gt) RequireUnitNormals(*d.normal_gt, &mask, "the ground truth");
   auto file = [&](const std::string& name) { return out.file(prefix + name); };
   const std::string ext = settings.extension();
   std::string names;

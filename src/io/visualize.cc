@@ -68,8 +68,8 @@ ImageF ReadNormalMap(const std::string& path, bool directx, Mask* mask, const Me
   return xyz;
 }
 
-std::vector<std::string> CheckNormalMap(const ImageF& normals, const Mask* mask,
-                                        const std::string& path) {
+Mask RequireUnitNormals(const ImageF& normals, const Mask* mask, const std::string& path,
+                        std::size_t* facing_away_out) {
   if (normals.channels != 3) throw std::runtime_error(path + ": a normal map needs 3 channels");
   if (mask && (mask->width != normals.width || mask->height != normals.height)) {
     throw std::runtime_error(path + ": is " + SizeText(normals.width, normals.height) +
@@ -111,6 +111,14 @@ std::vector<std::string> CheckNormalMap(const ImageF& normals, const Mask* mask,
                              " normals are not unit length (|n| = " + length + " at " +
                              where(first_bad) + "): a normal map holds unit vectors");
   }
+  if (facing_away_out) *facing_away_out = facing_away;
+  return present;
+}
+
+std::vector<std::string> CheckNormalMap(const ImageF& normals, const Mask* mask,
+                                        const std::string& path) {
+  std::size_t facing_away = 0;
+  const Mask present = RequireUnitNormals(normals, mask, path, &facing_away);
   std::vector<std::string> warnings;
   const std::size_t count = present.count();
   if (count == 0) return warnings;

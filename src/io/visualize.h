@@ -32,6 +32,10 @@ ImageF ReadNormalMap(const std::string& path, bool directx, Mask* mask,
 // (integrate/frame_check.h; not checked when most normals face away from the camera).
 std::vector<std::string> CheckNormalMap(const ImageF& normals, const Mask* mask,
                                         const std::string& path);
+// Its first half, for writers: the same refusals, no frame check. Returns the pixels with a
+// normal; counts those facing away from the camera when asked.
+Mask RequireUnitNormals(const ImageF& normals, const Mask* mask, const std::string& path,
+                        std::size_t* facing_away = nullptr);
 
 // The scale an error map is drawn to: the 99th percentile of the errors inside the mask, rounded
 // up to 1, 2 or 5 × 10^k (at least 1e-6), so the map shows where the error is whatever

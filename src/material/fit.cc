@@ -127,6 +127,21 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
   }
   const int k = data.images;
   if (std::string m = CheckLightCount(k, options); !m.empty()) throw std::invalid_argument(m);
+  // Photos that are black wherever there is a normal hold nothing to fit: every model explains
+  // them with zero coefficients (it came out as ka 0, ks 0, n 1 behind a warning).
+  {
+    bool lit = false;
+    for (std::size_t p = 0; p < normals.size() && !lit; ++p) {
+      if (normals[p].squaredNorm() == 0) continue;
+      const float* v = data.pixel(p);
+      for (int i = 0; i < 3 * k && !lit; ++i) lit = v[i] > 0;
+    }
+    if (!lit) {
+      throw std::invalid_argument(
+          "the photos are black (0) wherever the object is: nothing to "
+          "fit (under-exposed, or the wrong folder?)");
+    }
+  }
   const bool choose = options.models.size() > 1;
   const int folds = std::min(options.folds, k);
   MaterialFit result;

@@ -60,11 +60,15 @@ def assert_one_line_error(code, stderr, expected_code, pattern, names=None):
         assert str(names) in lines[0], f"{names} not named in {lines[0]!r}"
 
 
-def assert_refused(root, args, expected_code, pattern, names=None, **run_options):
-    """Runs `iphong ARGS`: it must fail cleanly (assert_one_line_error) and leave every file
-    under root, byte for byte, as it was."""
+def assert_refused(root, args, expected_code, pattern, names=None, ignore_warnings=False,
+                   **run_options):
+    """Runs `iphong ARGS`: it must fail cleanly (assert_one_line_error; warnings before the error
+    left out when asked) and leave every file under root, byte for byte, as it was."""
     before = snapshot(root)
     code, _, err = run(*args, **run_options)
+    if ignore_warnings:
+        err = "".join(line + "\n" for line in err.splitlines()
+                      if not line.startswith("iphong: warning: "))
     assert_one_line_error(code, err, expected_code, pattern, names)
     assert snapshot(root) == before
 

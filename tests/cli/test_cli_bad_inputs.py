@@ -322,6 +322,16 @@ def test_bad_command_line(rendered, small_height, tmp_path, args, code, pattern)
     assert_refused(tmp_path, args, code, pattern, cwd=tmp_path, timeout=60)
 
 
+def test_fit_material_refuses_photos_that_are_black_wherever_the_object_is(rendered, tmp_path):
+    """Eight black photos were fitted (ka 0, ks 0, n 1) behind a warning: nothing to fit."""
+    ds = user_copy(rendered, tmp_path / "ds")
+    for name in (ds / "filenames.txt").read_text().split():
+        (ds / name).write_bytes(grey_png(96, 96, 0))
+    assert_refused(tmp_path, ["fit-material", "ds", "--normals", "ds/normals.exr", "-o", "out"],
+                   1, r"ds: the photos are black \(0\) wherever the object is: nothing to fit",
+                   cwd=tmp_path, ignore_warnings=True)
+
+
 MEMORY_COMMANDS = [
     ["normals", "ds", "-o", "out"],
     ["render", str(FIXTURES / "scenes" / "photometric_sphere.json"), "-o", "out"],

@@ -1,6 +1,9 @@
 """Bad input to the Python module: ValueError (TypeError for a value of the wrong Python type)
 with a one-line message naming the argument — never a segfault, RuntimeError or pybind11's
 "Unable to cast" (issue 10)."""
+import shutil
+import subprocess
+
 import numpy as np
 import pytest
 
@@ -124,3 +127,48 @@ def test_calibrate_lights_keeps_the_command_lines_ranges():
         iphong.calibrate_lights(images, max_spheres=3)
     with pytest.raises(ValueError, match=r"saturation: expected a number in \(0, 1\]"):
         iphong.calibrate_lights(images, saturation=2)
+
+
+def test_nan_is_refused_by_the_shared_readers_and_writers(tmp_path):
+    """A NaN used to pass through Python's writers and readers where the command line refused it:
+    save_dataset, save_normals, load_dataset of a float capture, fit_material's float labels."""
+    scene = {"width": 32, "height": 32, "lights": [{"type": "hemisphere", "count": 6}],
+             "objects": [{"shape": "sphere", "radius": 0.9}]}
+    capture = iphong.render(scene, per_light=True)
+    images = capture["images"].copy()
+    images[2, 10, 11, 1] = np.nan
+    with pytest.raises(ValueError, match=r"image 3 has 1 pixel\(s\) that are not finite \(NaN or "
+                                         r"infinite; the first at column 11, row 10\)"):
+        iphong.save_dataset(tmp_path / "a", images, capture["light_directions"], format="exr")
+    assert not (tmp_path / "a").exists()
+    normals = capture["normals"].copy()
+    normals[5, 6] = np.nan
+    with pytest.raises(ValueError, match=r"1 normals are not finite .*column 6, row 5"):
+        iphong.save_normals(tmp_path / "n.exr", normals)
+    with pytest.raises(ValueError, match=r"normals are not unit length \(\|n\| = 2"):
+        iphong.save_normals(tmp_path / "n.exr", 2 * capture["normals"])
+    assert not (tmp_path / "n.exr").exists()
+    labels = np.where(capture["mask"], 1.0, -1.0)
+    labels[16, 16] = np.nan
+    with pytest.raises(ValueError, match=r"regions: labels must be whole numbers; the value at "
+                                         r"row 16, column 16 is nan"):
+        iphong.fit_material(capture["images"], capture["light_directions"], capture["normals"],
+                            mask=capture["mask"], albedo="regions", regions=labels)
+
+
+@pytest.mark.skipif(shutil.which("oiiotool") is None, reason="oiiotool not installed")
+def test_a_nan_in_a_float_capture_is_named_on_load(tmp_path):
+    scene = {"width": 32, "height": 32, "lights": [{"type": "hemisphere", "count": 6}],
+             "objects": [{"shape": "sphere", "radius": 0.9}]}
+    capture = iphong.render(scene, per_light=True)
+    folder = tmp_path / "cap"
+    iphong.save_dataset(folder, capture["images"], capture["light_directions"],
+                        mask=capture["mask"], format="exr")
+    image = folder / "004.exr"
+    subprocess.run(["oiiotool", str(image), "--subc", "2", "--powc", "0.5", "-o", str(image)],
+                   check=True)  # the square root of a negative number: NaN everywhere
+    inside = int(capture["mask"].sum())
+    with pytest.raises(ValueError, match=rf"004\.exr: {inside} pixel\(s\) inside the mask are not "
+                                         r"finite \(NaN or infinite; the first at column \d+, "
+                                         r"row \d+\)"):
+        iphong.load_dataset(folder)
