@@ -92,8 +92,12 @@ ImageF LoadNormals(const FitMaterialCommandOptions& o, const io::Dataset& datase
                                "(mask.png, or --mask)");
     }
     std::vector<std::string> warnings;
-    const std::vector<calibrate::SphereOutline> outlines =
-        calibrate::FindSpheres(dataset.mask, calibrate::SphereSearch{}, &warnings);
+    std::vector<calibrate::SphereOutline> outlines;
+    try {
+      outlines = calibrate::FindSpheres(dataset.mask, calibrate::SphereSearch{}, &warnings);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(dataset.files.mask_path + ": " + e.what());
+    }
     for (const std::string& warning : warnings) Warn(dataset.files.mask_path + ": " + warning);
     const calibrate::SphereGeometry sphere =
         calibrate::SphereFromOutline(outlines.front(), calibrate::Intrinsics{});

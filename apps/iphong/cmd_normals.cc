@@ -389,7 +389,13 @@ void RunEval(const EvalOptions& o) {
                                ", the normal maps are " + SizeText(truth.width, truth.height));
     }
   }
-  const solve::AngularErrorMetrics m = solve::CompareNormals(estimate, truth, mask);
+  solve::AngularErrorMetrics m;
+  try {
+    m = solve::CompareNormals(estimate, truth, mask);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(o.estimate + ": " + e.what() + " (" + truth_name +
+                             (o.mask.empty() ? "" : ", mask " + o.mask) + ")");
+  }
   if (!o.error_map.empty()) {
     io::WriteSingleOutputFile("eval", o.error_map, o.common.overwrite,
                               {o.estimate, o.ground_truth, o.mask}, [&](const std::string& temp) {
@@ -472,9 +478,12 @@ void AddNormalsCommand(CLI::App& app) {
 
   auto e = std::make_shared<EvalOptions>();
   auto* eval = app.add_subcommand("eval", "Angular error of a normal map against ground truth");
-  eval->add_option("estimate", e->estimate, "Estimated normals (EXR, xyz)")->required();
+  eval->add_option("estimate", e->estimate,
+                   "Estimated normals: a float map (EXR, TIFF: xyz), a picture (PNG, JPEG, TGA: "
+                   "(n + 1)/2) or a .mat (Normal_gt)")
+      ->required();
   eval->add_option("ground_truth", e->ground_truth,
-                   "Dataset directory, Normal_gt.mat or a normal map (EXR)")
+                   "Dataset directory, Normal_gt.mat or a normal map (as the estimate)")
       ->required();
   eval->add_option("--mask", e->mask, "Mask image (nonzero = evaluate)");
   eval->add_option("--error-map", e->error_map,

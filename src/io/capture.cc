@@ -224,6 +224,19 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
     c.order = list.string();
     listed_mask = read.mask_path;
   };
+  // A folder with nothing to read says so, before any light file is looked for.
+  const std::string own_list = Absolute(dir).filename().string() + ".txt";
+  if (options.images.empty() && !Exists(dir / "filenames.txt") &&
+      std::none_of(files.begin(), files.end(),
+                   [](const std::string& name) {
+                     return HasImageExtension(name) ||
+                            Lower(fs::path(name).extension().string()) == ".lp";
+                   }) &&
+      !LooksLikeImageList((dir / ".." / own_list).lexically_normal())) {
+    Fail(dir,
+         "holds no images (no image files, filenames.txt or .lp): is it the capture's "
+         "folder?");
+  }
   if (!options.images.empty()) {
     if (light_file.empty() && options.lights_needed) light_file = FindLightFile(dir, files);
     take_list(options.images);
@@ -241,10 +254,9 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
   } else {
     if (light_file.empty() && options.lights_needed) light_file = FindLightFile(dir, files);
     // <folder>.txt or images.txt here, or UW's <folder>.txt one folder up.
-    const std::string own = Absolute(dir).filename().string() + ".txt";
     fs::path list;
     for (const fs::path& candidate :
-         {dir / own, dir / "images.txt", (dir / ".." / own).lexically_normal()})
+         {dir / own_list, dir / "images.txt", (dir / ".." / own_list).lexically_normal()})
       if (list.empty() && LooksLikeImageList(candidate)) list = candidate;
     if (Lower(light_file.extension().string()) == ".lp") {
       c.layout = "RTI .lp";
@@ -318,8 +330,9 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
       Fail(c.lights_path, "has " + std::to_string(c.light_directions.size()) + " lights, but " +
                               directory + " holds " + std::to_string(c.names.size()) + " images (" +
                               Range(c.names) +
-                              "); give the images in light order with --images LIST (a text "
-                              "file, one name per line)");
+                              "): a light missing from the file or a photo too many; to choose "
+                              "the photos, list them in light order in a file given with "
+                              "--images LIST");
     }
   }
   if (options.lights_needed && !c.near.present()) {

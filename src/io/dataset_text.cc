@@ -229,6 +229,11 @@ namespace {
 // Unit directions (lengths off 1 by more than 1e-3 are reported), spanning three dimensions.
 void NormalizeDirections(std::vector<Vec3d>& directions, const std::string& source,
                          std::vector<std::string>* warnings, int first_line) {
+  // One warning for the file: the first line off, and how many (a file of unnormalized
+  // directions said the same thing once per light).
+  std::size_t off = 0;
+  int first_off = 0;
+  double first_length = 0;
   for (std::size_t i = 0; i < directions.size(); ++i) {
     Vec3d& d = directions[i];
     const int line = first_line + static_cast<int>(i);
@@ -242,13 +247,17 @@ void NormalizeDirections(std::vector<Vec3d>& directions, const std::string& sour
       std::snprintf(length, sizeof length, "%.3g", norm);
       Fail(source, std::string("light direction has length ") + length + ": not a direction", line);
     }
-    if (std::abs(norm - 1) > 1e-3 && warnings) {
-      char length[32];
-      std::snprintf(length, sizeof length, "%.6g", norm);
-      warnings->push_back(source + ":" + std::to_string(line) + ": light direction has length " +
-                          length + "; normalized");
-    }
+    if (std::abs(norm - 1) > 1e-3 && off++ == 0) first_off = line, first_length = norm;
     d = (d / scale).normalized();
+  }
+  if (off > 0 && warnings) {
+    char length[32];
+    std::snprintf(length, sizeof length, "%.6g", first_length);
+    warnings->push_back(source + ":" + std::to_string(first_off) + ": light direction has length " +
+                        length + "; normalized" +
+                        (off > 1 ? " (as are " + std::to_string(off - 1) + " more of the " +
+                                       std::to_string(directions.size()) + " directions)"
+                                 : std::string()));
   }
   if (std::string m = solve::CheckLightSpan(directions); !m.empty()) Fail(source, m);
   // A light behind the surface's plane as seen from the camera reaches only what faces away from

@@ -312,12 +312,16 @@ def small_height(tmp_path_factory):
      r"small_mask\.png: is 20x20, the normal maps are 96x96"),
     (["render", "nowhere.json", "-o", "out"], 1, r"nowhere\.json: no such file"),
     (["demo", "--size", "1000000", "-o", "out"], 2, r"--size: Value 1000000 not in range 8 to 8192"),
+    (["normals", "ds", "--light", "x", "-o", "out"], 2, r"\(--light: did you mean --lights\?\)"),
+    (["normals", "empty", "-o", "out"], 1, r"empty: holds no images \(no image files, "
+                                           r"filenames\.txt or \.lp\)"),
     (["calibrate-lights", "ds", "--normals", "ds/normals.exr", "-o", "out", "--saturation", "2"], 2,
      r"--saturation: must be a number in \(0, 1\] \(got 2\)"),
 ])
 def test_bad_command_line(rendered, small_height, tmp_path, args, code, pattern):
     user_copy(rendered, tmp_path / "ds")
     (tmp_path / "small_mask.png").write_bytes(grey_png(20, 20))
+    (tmp_path / "empty").mkdir()
     shutil.copy(small_height, tmp_path / "small.exr")
     assert_refused(tmp_path, args, code, pattern, cwd=tmp_path, timeout=60)
 
@@ -380,7 +384,7 @@ def test_warnings_do_not_hide_errors_and_stdout_holds_the_report(rendered, tmp_p
     code, out, err = run("normals", ds, "-o", tmp_path / "out")
     assert code == 0, err
     assert err.splitlines() == [f"iphong: warning: {ds}/light_directions.txt:1: light direction "
-                                "has length 2; normalized"]
+                                "has length 2; normalized"]  # the other 11 are unit
     assert "Angular error against the ground truth" in out
 
 

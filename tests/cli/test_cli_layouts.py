@@ -124,7 +124,7 @@ def test_images_list_names_the_photos_and_a_count_mismatch_says_how(tmp_path):
     # Eleven photos and twelve lights: the advice names a flag, not a file to write into the data.
     (folder / "buddha.11.tga").unlink()
     code, _, err = run("normals", folder, "-o", tmp_path / "bad")
-    assert code == 1 and "give the images in light order with --images LIST" in err, err
+    assert code == 1 and "list them in light order in a file given with --images LIST" in err, err
     assert "filenames.txt" not in err
 
 

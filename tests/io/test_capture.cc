@@ -150,8 +150,9 @@ TEST_F(Capture, UwLayoutRunsAsItIs) {
   EXPECT_EQ(ErrorOf([&] { FindCapture(dir_.string(), {}); }),
             (dir_ / ".." / "lights.txt").lexically_normal().string() + ": has 3 lights, but " +
                 dir_.string() +
-                " holds 12 images (obj.0.tga ... obj.11.tga); list the images in filenames.txt, "
-                "in light order");
+                " holds 12 images (obj.0.tga ... obj.11.tga): a light missing from the file or "
+                "a photo too many; to choose the photos, list them in light order in a file "
+                "given with --images LIST");
 }
 
 TEST_F(Capture, AMaskNamedOnTheCommandLineIsNotALightImage) {
