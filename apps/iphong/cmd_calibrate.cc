@@ -159,7 +159,7 @@ void RunCalibrate(const CalibrateOptions& o) {
   load.memory = o.common.memory();
   io::Dataset dataset;
   {
-    Progress decode("decode", o.common.talk());
+    Progress decode("decode", o.common.progress_mode());
     load.progress = [&decode](double fraction) { decode.Update(fraction); };
     dataset = io::LoadDataset(o.images, load);
   }

@@ -278,7 +278,7 @@ void RunFitMaterial(const FitMaterialCommandOptions& o) {
 
   material::MaterialFit fit;
   {
-    Progress progress("fit", o.common.talk());
+    Progress progress("fit", o.common.progress_mode());
     options.progress = [&progress](double fraction) { progress.Update(fraction); };
     try {
       fit = material::FitMaterial(data, normals, options);

@@ -117,7 +117,7 @@ void RunIntegrate(IntegrateCommandOptions& o) {
                                SizeText(in.normals.width, in.normals.height));
     }
   }
-  auto progress = std::make_shared<Progress>("integrate", o.common.talk());
+  auto progress = std::make_shared<Progress>("integrate", o.common.progress_mode());
   options.progress = [progress](double fraction) { progress->Update(fraction); };
   RequireMemory(
       o.common.memory(), io::EstimateSurfaceBytes(in.mask.count(), options),

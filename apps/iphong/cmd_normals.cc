@@ -96,7 +96,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   io::Dataset& dataset = loaded.dataset;
   ReportCapture(o.dataset, dataset, o.common);
   solve::NormalOptions options = NormalOptionsFor(o, dataset);
-  auto fit_progress = std::make_shared<Progress>("fit", o.common.talk());
+  auto fit_progress = std::make_shared<Progress>("fit", o.common.progress_mode());
   options.progress = [fit_progress](double fraction) { fit_progress->Update(fraction); };
 
   const double load_seconds = SecondsSince(total_start);
@@ -265,7 +265,7 @@ void RunNormals(const NormalsCommandOptions& o) {
     integrate::IntegrateOptions integration;
     integration.allow_back_facing = true;
     integration.threads = o.common.threads;
-    auto integrate_progress = std::make_shared<Progress>("integrate", o.common.talk());
+    auto integrate_progress = std::make_shared<Progress>("integrate", o.common.progress_mode());
     integration.progress = [integrate_progress](double f) { integrate_progress->Update(f); };
     RequireMemory(
         o.common.memory(), io::EstimateSurfaceBytes(with_normal.count(), integration),

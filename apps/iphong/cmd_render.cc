@@ -54,7 +54,7 @@ void RunRender(const RenderCommandOptions& o) {
 
   render::RenderOutput out;
   try {
-    Progress progress("render", o.common.talk());
+    Progress progress("render", o.common.progress_mode());
     file.options.progress = [&progress](double f) { progress.Update(f); };
     out = render::Render(file.scene, file.options, o.per_light);
     file.options.progress = nullptr;
@@ -69,7 +69,7 @@ void RunRender(const RenderCommandOptions& o) {
                              "(check the camera and the objects' positions and sizes)");
   }
   {
-    Progress write("write", o.common.talk());
+    Progress write("write", o.common.progress_mode());
     io::WriteRenderOutput(output, "", file.scene, file.options, out, file.output, o.per_light,
                           [&write](double f) { write.Update(f); });
   }

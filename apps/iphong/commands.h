@@ -8,10 +8,12 @@
 #include "core/resources.h"
 #include "io/capture.h"
 #include "io/dataset.h"
+#include "iphong/console.h"
 
 namespace iphong::cli {
 
-// Exit codes (docs/cli.md, "Errors and exit codes"); a signal ends the process as that signal (128 + n).
+// Exit codes (docs/cli.md, "Errors and exit codes"); a signal ends the process as that signal (128
+// + n).
 constexpr int kExitInput = 1;      // a file or value is wrong
 constexpr int kExitUsage = 2;      // the command line is wrong
 constexpr int kExitResources = 3;  // the request exceeds the memory limit
@@ -34,7 +36,16 @@ struct CommonOptions {
   bool quiet = false;  // nothing on stdout, no progress; errors and warnings still on stderr
   bool json = false;   // the run's summary as JSON on stdout, nothing else there
 
+  // --progress: "auto" (a bar on a terminal; in a log, a plain line every 10 s once a stage
+  // passes 10 s), "always" (also with --json; lines every 2 s), "never".
+  std::string progress = "auto";
+
   bool talk() const { return !quiet && !json; }  // human-readable lines and progress
+  ProgressMode progress_mode() const {
+    if (quiet || progress == "never") return ProgressMode::kNever;
+    if (progress == "always") return ProgressMode::kAlways;
+    return json ? ProgressMode::kNever : ProgressMode::kAuto;
+  }
 
   MemoryLimit memory() const {
     MemoryLimit limit;

@@ -52,6 +52,12 @@ void AddOverwriteOption(CLI::App* cmd, CommonOptions& common) {
 }
 
 void AddReportOptions(CLI::App* cmd, CommonOptions& common) {
+  cmd->add_option("--progress", common.progress,
+                  "Progress of long stages on stderr: auto (a bar on a terminal; in a log or "
+                  "pipe a line every 10 s once a stage passes 10 s), always (lines every 2 s, "
+                  "also with --json), never")
+      ->check(CLI::IsMember({"auto", "always", "never"}))
+      ->capture_default_str();
   cmd->add_flag("-q,--quiet", common.quiet, "Print nothing but errors and warnings");
   cmd->add_flag("--json", common.json,
                 "Print the run's summary as one JSON document on stdout (for scripts)");
@@ -122,7 +128,7 @@ io::ObservationSet LoadCaptureObservations(const std::string& folder, const Capt
   load.capture = capture.resolved();
   load.threads = common.threads;
   load.memory = common.memory();
-  Progress decode("decode", common.talk());
+  Progress decode("decode", common.progress_mode());
   load.progress = [&decode](double fraction) { decode.Update(fraction); };
   return io::LoadObservations(folder, load);
 }

@@ -109,26 +109,36 @@ void AwaitInterrupt() {
 
 bool ErrIsTerminal() { return own_stderr_tty; }
 
-Progress::Progress(std::string stage, bool enabled, std::string unit, double total)
+Progress::Progress(std::string stage, ProgressMode mode, std::string unit, double total)
     : stage_(std::move(stage)),
       unit_(std::move(unit)),
       total_(total),
-      enabled_(enabled && own_stderr_tty),
+      bar_(mode != ProgressMode::kNever && own_stderr_tty),
+      lines_(mode != ProgressMode::kNever && !own_stderr_tty),
+      line_interval_(mode == ProgressMode::kAlways ? 2 : 10),
       start_(std::chrono::steady_clock::now()),
       last_(start_) {}
 
 Progress::~Progress() {
-  if (shown_) std::fprintf(Err(), "\r\033[K");
+  if (!shown_) return;
+  if (bar_) {
+    std::fprintf(Err(), "\r\033[K");
+  } else {
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    std::fprintf(Err(), "iphong: %s: done, %.0f s\n", stage_.c_str(), elapsed);
+  }
 }
 
 void Progress::Count(double done) { Update(total_ > 0 ? done / total_ : 0); }
 
 void Progress::Update(double fraction) {
-  if (!enabled_) return;
+  if (!bar_ && !lines_) return;
   std::lock_guard<std::mutex> lock(mutex_);
   const auto now = std::chrono::steady_clock::now();
   const double elapsed = std::chrono::duration<double>(now - start_).count();
-  if (elapsed < 1 || std::chrono::duration<double>(now - last_).count() < 0.1) return;
+  const double since = std::chrono::duration<double>(now - last_).count();
+  if (bar_ ? elapsed < 1 || since < 0.1 : since < line_interval_) return;
   last_ = now;
   shown_ = true;
   fraction = std::min(std::max(fraction, 0.0), 1.0);
@@ -141,8 +151,13 @@ void Progress::Update(double fraction) {
   if (fraction > 0.02) {
     std::snprintf(left, sizeof left, ", about %.0f s left", elapsed * (1 - fraction) / fraction);
   }
-  std::fprintf(Err(), "\r\033[K%s: %3.0f%%%s, %.0f s%s", stage_.c_str(), 100 * fraction, counts,
-               elapsed, left);
+  if (bar_) {
+    std::fprintf(Err(), "\r\033[K%s: %3.0f%%%s, %.0f s%s", stage_.c_str(), 100 * fraction, counts,
+                 elapsed, left);
+  } else {  // a log, a pipe, a notebook: whole lines
+    std::fprintf(Err(), "iphong: %s: %.0f%%%s, %.0f s%s\n", stage_.c_str(), 100 * fraction, counts,
+                 elapsed, left);
+  }
   std::fflush(Err());
 }
 

@@ -35,9 +35,16 @@ void Warn(const std::string& message);  // "iphong: warning: MESSAGE"
 // Shown only when stderr is a terminal and the run is not --quiet or --json, and only once the
 // stage has run for a second (short stages stay silent). Update may be called from any thread;
 // the line is redrawn at most ten times a second and cleared when the stage ends.
+// How a long stage shows its progress on stderr.
+enum class ProgressMode {
+  kNever,
+  kAuto,    // a bar on a terminal; otherwise plain lines every 10 s once a stage passes 10 s
+  kAlways,  // a bar on a terminal; otherwise plain lines every 2 s
+};
+
 class Progress {
  public:
-  Progress(std::string stage, bool enabled, std::string unit = "", double total = 0);
+  Progress(std::string stage, ProgressMode mode, std::string unit = "", double total = 0);
   ~Progress();
   Progress(const Progress&) = delete;
   Progress& operator=(const Progress&) = delete;
@@ -47,7 +54,8 @@ class Progress {
  private:
   std::string stage_, unit_;
   double total_;
-  bool enabled_;
+  bool bar_ = false, lines_ = false;  // a bar on a terminal, or plain lines in a log
+  double line_interval_ = 10;         // seconds between plain lines (and before the first)
   bool shown_ = false;
   std::chrono::steady_clock::time_point start_, last_;
   std::mutex mutex_;

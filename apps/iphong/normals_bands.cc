@@ -112,13 +112,13 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
   std::vector<float> sample_albedo;  // every 64th solved pixel's brightest channel
   std::size_t specular_pixels = 0, chosen_pixels = 0;
   const bool directx = o.convention == "directx";
-  auto progress = std::make_shared<Progress>("sample", o.common.talk(), "rows", height);
+  auto progress = std::make_shared<Progress>("sample", o.common.progress_mode(), "rows", height);
   std::shared_ptr<Progress> fit;
   solve::BandProgress band_progress;
   band_progress.rows = [&](int pass, int rows) {
     if (pass == 2 && !fit) {
       progress.reset();
-      fit = std::make_shared<Progress>("fit", o.common.talk(), "rows", height);
+      fit = std::make_shared<Progress>("fit", o.common.progress_mode(), "rows", height);
     }
     (pass == 1 ? progress : fit)->Count(rows);
   };
