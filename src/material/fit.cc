@@ -136,7 +136,7 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
       const float* v = data.pixel(p);
       for (int i = 0; i < 3 * k && !lit; ++i) lit = v[i] > 0;
     }
-    if (!lit) {
+    if (!lit && given > 0) {  // none at all is the "no pixel" error below
       throw std::invalid_argument(
           "the photos are black (0) wherever the object is: nothing to "
           "fit (under-exposed, or the wrong folder?)");
