@@ -76,7 +76,7 @@ void BindIo(py::module_& m) {
         io::WriteSingleOutputFile("python", path, overwrite, {}, [&](const std::string& temp) {
           if (ext == ".png") {
             io::WriteImage(temp, io::NormalMapPicture(normals, mask, convention == "directx"),
-                           {16, io::Encoding::kLinear});
+                           {16, io::Encoding::kData});
           } else {
             ImageF masked = normals;
             for (std::size_t p = 0; p < mask.inside.size(); ++p)

@@ -178,7 +178,7 @@ photos in light order; lights, intensities, mask: files; encoding "auto"/"linear
 (x, y, w, h) in the files' pixels; downscale N).
 Returns images (K, H, W, 3) float32 linear, light_directions (K, 3), light_intensities (K, 3),
 mask (H, W) bool, normal_gt (H, W, 3) or None, material (dict) or None, filenames, warnings,
-not_read (files beside the photos taken for companions, an albedo picture or *.normals.dat, and
+not_read (files beside the photos taken for companions, an albedo picture or NAME.normals.dat, and
 not read), description (what was read, one line), encoding, image_counts (saturated and black pixels); for a
 near-light capture (light_positions.txt) also light_positions (K, 3) mm, camera (camera.json's
 dict), light_axes (K, 3) and light_anisotropy (K) or None, depth_gt (H, W) mm or None (all None

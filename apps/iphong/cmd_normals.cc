@@ -227,7 +227,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   io::WriteImage(out.file("normals.exr"), result.normals);
   io::WriteImage(out.file("normals.png"),
                  io::NormalMapPicture(result.normals, dataset.mask, o.convention == "directx"),
-                 {16, io::Encoding::kLinear});
+                 {16, io::Encoding::kData});
   io::WriteImage(out.file("albedo.exr"), result.albedo);
   io::WriteAlbedoPicture(out.file("albedo.png"), result.albedo, dataset.mask);
   io::WriteImage(out.file("residual.exr"), result.residual);

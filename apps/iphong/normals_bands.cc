@@ -127,7 +127,7 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
     if (!normals) {
       normals = std::make_unique<io::ImageRowWriter>(out.file("normals.exr"), width, height, 3);
       picture = std::make_unique<io::ImageRowWriter>(out.file("normals.png"), width, height, 3,
-                                                     io::WriteOptions{16, io::Encoding::kLinear});
+                                                     io::WriteOptions{16, io::Encoding::kData});
       albedo = std::make_unique<io::ImageRowWriter>(out.file("albedo.exr"), width, height, 3);
       residual = std::make_unique<io::ImageRowWriter>(out.file("residual.exr"), width, height, 1);
       if (!options.material_known && !band.specular.pixels.empty()) {

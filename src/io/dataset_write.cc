@@ -212,7 +212,7 @@ void WriteDatasetFiles(OutputFolder& out, const std::string& prefix, const Datas
   WriteImage(file("mask.png"), MaskImage(mask), {8, Encoding::kLinear});
   if (d.normal_gt) {
     WriteImage(file("normals.exr"), *d.normal_gt);
-    WriteImage(file("normals.png"), NormalMapPicture(*d.normal_gt, mask), {16, Encoding::kLinear});
+    WriteImage(file("normals.png"), NormalMapPicture(*d.normal_gt, mask), {16, Encoding::kData});
     WriteNormalMat(file("Normal_gt.mat"), "Normal_gt", *d.normal_gt);
   }
   if (!d.material_json.empty()) WriteTextFile(file("material.json"), d.material_json);
@@ -250,7 +250,7 @@ void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const rende
     WriteImage(file("mask.png"), MaskImage(output.mask), {8, Encoding::kLinear});
     WriteImage(file("normals.exr"), output.normal_cam);
     WriteImage(file("normals.png"), NormalMapPicture(output.normal_cam, output.mask),
-               {16, Encoding::kLinear});
+               {16, Encoding::kData});
     WriteNormalMat(file("Normal_gt.mat"), "Normal_gt", output.normal_cam);
     WriteTextFile(file("material.json"), material);
   }

@@ -120,8 +120,10 @@ void WriteImage(const std::string& path, const ImageF& image, const WriteOptions
       is_float ? OIIO::TypeDesc::FLOAT
                : (options.bits == 16 ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::UINT8);
   OIIO::ImageSpec spec(image.width, image.height, image.channels, format);
-  spec.attribute("oiio:ColorSpace",
-                 is_float || options.encoding == Encoding::kLinear ? "Linear" : "sRGB");
+  if (is_float || options.encoding != Encoding::kData) {
+    spec.attribute("oiio:ColorSpace",
+                   is_float || options.encoding == Encoding::kLinear ? "Linear" : "sRGB");
+  }
   spec.attribute("Software", "iphong");
 
   // Encoded in memory, so the bytes reach the disk through one verified write: OpenImageIO's

@@ -15,6 +15,9 @@ namespace iphong::io {
 enum class Encoding {
   kLinear,  // values written as they are (scaled to the integer range for 8/16-bit)
   kSrgb,    // sRGB transfer curve applied before quantizing (8/16-bit only)
+  // Values written as they are with no colour-space statement: pictures of data (normal maps),
+  // which a gAMA 1.0 tag made browsers show washed out.
+  kData,
 };
 
 struct WriteOptions {

@@ -104,8 +104,10 @@ ImageRowWriter::ImageRowWriter(const std::string& path, int width, int height, i
       is_float_ ? OIIO::TypeDesc::FLOAT
                 : (options.bits == 16 ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::UINT8);
   OIIO::ImageSpec spec(width, height, channels, format);
-  spec.attribute("oiio:ColorSpace",
-                 is_float_ || options.encoding == Encoding::kLinear ? "Linear" : "sRGB");
+  if (is_float_ || options.encoding != Encoding::kData) {
+    spec.attribute("oiio:ColorSpace",
+                   is_float_ || options.encoding == Encoding::kLinear ? "Linear" : "sRGB");
+  }
   spec.attribute("Software", "iphong");
   proxy_ = std::make_unique<Proxy>(path);
   if (proxy_->error() != 0) throw OutputError(path + ": " + std::strerror(proxy_->error()));

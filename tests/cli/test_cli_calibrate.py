@@ -262,7 +262,7 @@ def test_normals_estimate_intensities_ignores_the_intensity_file(tmp_path):
     (["--circle", "1000,1000,50"], 2,
      r"--circle: the circle \(1000\.0, 1000\.0, r 50\.0\) lies mostly outside the 96x96 images"),
     (["--intrinsics", "0,0,48,48"], 2, r"--intrinsics: fx and fy must be > 0, cx and cy finite"),
-    (["--saturation", "0"], 2, r"--saturation: must be a number > 0 \(got 0\)"),
+    (["--saturation", "0"], 2, r"--saturation: must be a number in \(0, 1\] \(got 0\)"),
 ])
 def test_bad_flags(tmp_path, args, code, pattern):
     folder = capture(tmp_path / "ball")

@@ -215,6 +215,14 @@ TEST_F(Capture, EncodingIsWhatTheFileStatesElseLinear) {
   EXPECT_FALSE(bare.stated) << bare.statement;
   EXPECT_EQ(ReadImage((dir_ / "bare.png").string()).width, 4);
 
+  // Pictures of data (normals.png) state nothing, as DiLiGenT's Normal_gt.png: a gAMA 1 tag made
+  // browsers show them washed out. The values are stored as they are.
+  WriteImage((dir_ / "data.png").string(), ImageF(4, 3, 3, 0.5f), {16, Encoding::kData});
+  const StoredEncoding data = ReadStoredEncoding((dir_ / "data.png").string());
+  EXPECT_FALSE(data.stated) << data.statement;
+  EXPECT_EQ(data.bits, 16);
+  EXPECT_NEAR(ReadImage((dir_ / "data.png").string()).pixels[0], 0.5f, 1e-4f);
+
   WriteImage((dir_ / "srgb.png").string(), ImageF(4, 3, 3, 0.5f), {8, Encoding::kSrgb});
   const StoredEncoding srgb = ReadStoredEncoding((dir_ / "srgb.png").string());
   EXPECT_TRUE(srgb.stated);
