@@ -250,8 +250,9 @@ void RunNormals(const NormalsCommandOptions& o) {
                       io::FormatTriples(estimated->light_intensities));
   }
   if (errors)
-    io::WriteErrorMap(out.file("error.png"), errors->error_deg, dataset.mask,
-                      io::ErrorMapScale(errors->error_deg, dataset.mask));
+    io::WriteErrorMap(
+        out.file("error.png"), errors->error_deg, dataset.mask,
+        o.error_range > 0 ? o.error_range : io::ErrorMapScale(errors->error_deg, dataset.mask));
   if (near_run) WriteNearOutputs(out, *near_run, dataset, metrics, o.common);
   std::optional<io::SurfaceFiles> surface;
   integrate::IntegrateResult heights;
@@ -352,6 +353,7 @@ void RunNormals(const NormalsCommandOptions& o) {
 struct EvalOptions {
   std::string estimate, ground_truth, mask;
   std::string error_map;
+  double error_range = 0;  // degrees at the top of the colour scale; 0 = from the data
   std::string convention = "opengl";
   CommonOptions common;
 };
@@ -400,7 +402,9 @@ void RunEval(const EvalOptions& o) {
     io::WriteSingleOutputFile("eval", o.error_map, o.common.overwrite,
                               {o.estimate, o.ground_truth, o.mask}, [&](const std::string& temp) {
                                 io::WriteErrorMap(temp, m.error_deg, mask,
-                                                  io::ErrorMapScale(m.error_deg, mask));
+                                                  o.error_range > 0
+                                                      ? o.error_range
+                                                      : io::ErrorMapScale(m.error_deg, mask));
                               });
   }
   std::printf("%s\n", MetricsJson(m).dump(2).c_str());
@@ -450,6 +454,10 @@ void AddNormalsCommand(CLI::App& app) {
                 "Estimate each light's RGB intensity with the normals (semi-calibrated; the "
                 "intensity file is not used; written as light_intensities.txt, each channel's "
                 "mean 1)");
+  cmd->add_option("--error-range", o->error_range,
+                  "With ground truth: degrees at the top of error.png's colour scale, so maps of "
+                  "several runs compare (default: from the data, the 95th percentile rounded up)")
+      ->check(Positive());
   cmd->add_flag("--strict", o->strict,
                 "Refuse (exit 1, nothing written) a light file whose normals read better in "
                 "another frame (y down, x mirrored, x and y swapped) instead of warning");
@@ -486,6 +494,10 @@ void AddNormalsCommand(CLI::App& app) {
                    "Dataset directory, Normal_gt.mat or a normal map (as the estimate)")
       ->required();
   eval->add_option("--mask", e->mask, "Mask image (nonzero = evaluate)");
+  eval->add_option("--error-range", e->error_range,
+                   "Degrees at the top of the error map's colour scale, so maps of several runs "
+                   "compare (default: from the data, the 95th percentile rounded up)")
+      ->check(Positive());
   eval->add_option("--error-map", e->error_map,
                    "Write the error picture (PNG) here (a new file, or --overwrite)");
   eval->add_flag("--overwrite", e->common.overwrite, "Replace an existing --error-map file");

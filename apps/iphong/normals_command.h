@@ -27,8 +27,9 @@ struct NormalsCommandOptions {
   bool fast = false;
   bool integrate = false;
   bool estimate_intensities = false;
-  bool strict = false;  // a light file in another frame is an error, not a warning
-  double distance = 0;  // near lights: the object's distance along the axis (mm), 0 = find it
+  bool strict = false;     // a light file in another frame is an error, not a warning
+  double error_range = 0;  // error.png's top of scale in degrees; 0 = from the data
+  double distance = 0;     // near lights: the object's distance along the axis (mm), 0 = find it
   // Directions only: "auto" (chosen by held-out prediction, ∞ among the candidates), "inf"
   // (distant lights) or a distance in pixels.
   std::string light_distance = "auto";
