@@ -191,6 +191,9 @@ struct IntensityOptions {
   // Over this median relative residual of Lambert on the kept observations, the images do not
   // follow the model the estimate assumes, and it is refused (see intensities.cc).
   double max_residual = 0.05;
+  // Under this eigenvalue gap another set of intensities explains the images almost as well, and
+  // what Lambert leaves unexplained decides between them; refused (see intensities.cc).
+  double min_eigen_gap = 8;
   int threads = 0;
   std::string Check() const;
 };
