@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/timing.h"
+#include "core/version.h"
 #include "io/dataset_text.h"
 #include "io/files.h"
 #include "io/image_io.h"
@@ -134,9 +135,23 @@ void RunRelight(const RelightCommandOptions& o) {
                                 }
                               });
   }
+  const double seconds = SecondsSince(start);
+  nlohmann::json lights = nlohmann::json::array();
+  for (const auto& light : input.lights) {
+    const Vec3d& d = light.direction_cam;
+    lights.push_back({d.x(), d.y(), d.z()});
+  }
+  PrintJson(o.common, nlohmann::json{{"iphong_version", kVersion},
+                                     {"result_dir", dir},
+                                     {"output", o.output},
+                                     {"viewer", o.viewer},
+                                     {"shading", described},
+                                     {"light_directions", lights},
+                                     {"exposure", input.exposure},
+                                     {"seconds", seconds}}
+                          .dump(2));
   Say(o.common, "Relit %s (%s) under %zu light(s), exposure %.4g: wrote %s (%.2f s)\n", dir.c_str(),
-      described.c_str(), input.lights.size(), input.exposure, o.output.c_str(),
-      SecondsSince(start));
+      described.c_str(), input.lights.size(), input.exposure, o.output.c_str(), seconds);
 }
 
 }  // namespace
@@ -176,7 +191,7 @@ void AddRelightCommand(CLI::App& app) {
   cmd->add_flag("--overwrite", o->common.overwrite, "Replace an existing output file");
   AddThreadsOption(cmd, o->common);
   AddMemoryOption(cmd, o->common);
-  cmd->add_flag("-q,--quiet", o->common.quiet, "Print nothing on stdout");
+  AddReportOptions(cmd, o->common);
   cmd->callback([o] { RunRelight(*o); });
 }
 

@@ -137,3 +137,17 @@ def test_bad_inputs(capture, tmp_path):
     for light in ("0,0,1", "0.5,0,0.87"):
         code, _, err = run("relight", n, "--light", light, "-o", mine, "--overwrite")
         assert code == 0, err
+
+
+def test_relight_json_reports_the_run_for_scripts(tmp_path):
+    data = tmp_path / "sphere"
+    render_dataset(data)
+    code, out, err = run("relight", data, "--light", "0,1,1", "-o", tmp_path / "lit.png", "--json")
+    assert code == 0, err
+    report = json.loads(out)  # stdout holds the JSON document and nothing else
+    assert report["output"] == str(tmp_path / "lit.png") and not report["viewer"]
+    assert report["light_directions"] == [[0.0, pytest.approx(0.5 ** 0.5),
+                                           pytest.approx(0.5 ** 0.5)]]
+    assert report["shading"].startswith("phong from") and report["exposure"] > 0
+    code, out, err = run("relight", data, "--light", "0,0,1", "-o", tmp_path / "q.png", "-q")
+    assert code == 0 and out == "", (out, err)
