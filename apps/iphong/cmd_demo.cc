@@ -210,8 +210,7 @@ void RunDemo(const DemoOptions& options) {
   const solve::AngularErrorMetrics woodham_error =
       solve::CompareNormals(woodham.normals, data_set.normal_gt, data_set.mask);
   io::WriteImage(out.file("normals/normals.png"),
-                 io::NormalMapPicture(recovered.normals, data_set.mask),
-                 {16, io::Encoding::kData});
+                 io::NormalMapPicture(recovered.normals, data_set.mask), {16, io::Encoding::kData});
   io::WriteImage(out.file("normals/normals.exr"), recovered.normals);
   io::WriteErrorMap(out.file("normals/error.png"), phong_error.error_deg, data_set.mask,
                     io::ErrorMapScale(phong_error.error_deg, data_set.mask));

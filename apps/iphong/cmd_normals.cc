@@ -37,6 +37,8 @@ nlohmann::json MetricsJson(const solve::AngularErrorMetrics& m) {
           {"fraction_below_20_deg", m.below_20_deg}};
 }
 
+}  // namespace
+
 nlohmann::json FrameCheckJson(const integrate::FrameCheckResult& r) {
   nlohmann::json readings = nlohmann::json::array();
   for (const integrate::FrameReadingScore& s : r.scores) {
@@ -48,6 +50,33 @@ nlohmann::json FrameCheckJson(const integrate::FrameCheckResult& r) {
           {"silhouette_pixels", r.silhouette_pixels},
           {"readings", readings}};
 }
+
+std::optional<integrate::FrameCheckResult> CheckLightFrame(const NormalsCommandOptions& o,
+                                                           const io::Dataset& dataset,
+                                                           const ImageF& normals,
+                                                           const Mask& with_normal) {
+  // A file with most lights behind the object (z < 0) has had its own warning: its fix (y and z
+  // negated) is not a reading of the image plane.
+  std::size_t behind = 0;
+  for (const Vec3d& l : dataset.light_directions) behind += l.z() < 0;
+  if (2 * behind > dataset.light_directions.size()) return std::nullopt;
+  integrate::FrameCheckOptions check;
+  check.threads = o.common.threads;
+  integrate::FrameCheckResult frame = integrate::CheckNormalFrame(normals, with_normal, check);
+  if (!frame.message.empty()) {
+    const std::string& lights = dataset.files.lights_path;
+    const std::string text = (lights.empty() ? o.dataset : lights) +
+                             ": the light directions look like another frame: " + frame.message +
+                             "; check the file's axes (x right, y up toward row 0, z toward the "
+                             "camera)" +
+                             (o.strict ? "" : ", or pass --strict to refuse such a file");
+    if (o.strict) throw std::runtime_error(text);
+    Warn(text);
+  }
+  return frame;
+}
+
+namespace {
 
 void RunNormals(const NormalsCommandOptions& o) {
   const auto total_start = Clock::now();
@@ -141,31 +170,14 @@ void RunNormals(const NormalsCommandOptions& o) {
   options.progress = nullptr;
   fit_progress.reset();  // clears its line
   const ImageF& ambiguity = result.ambiguity_deg;
-  // The light file's frame, from the normals it gave: one in another image-plane frame (y down,
-  // x mirrored, x and y swapped) returns the normals in that frame (integrate/frame_check.h).
-  // The one- and two-image solve is left out: its priors make any reading integrable. A file
-  // with most lights behind the object (z < 0) has had its own warning: its fix (y and z
-  // negated) is not a reading of the image plane.
-  std::size_t behind = 0;
-  for (const Vec3d& l : data.light_directions) behind += l.z() < 0;
+  // The light file's frame, from the normals it gave (CheckLightFrame). The one- and two-image
+  // solve is left out: its priors make any reading integrable.
   std::optional<integrate::FrameCheckResult> frame;
-  if (ambiguity.pixels.empty() && !near_run && 2 * behind <= data.light_directions.size()) {
+  if (ambiguity.pixels.empty() && !near_run) {
     Mask with_normal = dataset.mask;
     for (std::size_t p = 0; p < with_normal.inside.size(); ++p)
       with_normal.inside[p] = with_normal.inside[p] && result.residual.pixels[p] >= 0;
-    integrate::FrameCheckOptions check;
-    check.threads = o.common.threads;
-    frame = integrate::CheckNormalFrame(result.normals, with_normal, check);
-    if (!frame->message.empty()) {
-      const std::string& lights = dataset.files.lights_path;
-      const std::string text =
-          (lights.empty() ? o.dataset : lights) +
-          ": the light directions look like another frame: " + frame->message +
-          "; check the file's axes (x right, y up toward row 0, z toward the " + "camera)" +
-          (o.strict ? "" : ", or pass --strict to refuse such a file");
-      if (o.strict) throw std::runtime_error(text);
-      Warn(text);
-    }
+    frame = CheckLightFrame(o, dataset, result.normals, with_normal);
   }
 
   metrics["iphong_version"] = kVersion;

@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "integrate/frame_check.h"
 #include "io/capture_bands.h"
 #include "io/output_folder.h"
 #include "iphong/commands.h"
@@ -56,6 +57,16 @@ nlohmann::json NormalsInputJson(const io::Dataset& d);
 nlohmann::json EstimatedMaterialJson(const solve::NormalResult& result);
 // metrics.json's "material": known, lambertian, estimated or lambertian (chosen).
 std::string MaterialLabel(const solve::NormalOptions& options, const solve::NormalResult& result);
+
+// The light file's frame, checked on the normals it gave (integrate/frame_check.h: a file in
+// another image-plane frame returns the normals in that frame): a warning naming the reading
+// that fits, or with --strict an error. Nothing for a file with most lights behind the object,
+// which has its own warning. `normals` may be the capture's field averaged down (bands).
+std::optional<integrate::FrameCheckResult> CheckLightFrame(const NormalsCommandOptions& o,
+                                                           const io::Dataset& dataset,
+                                                           const ImageF& normals,
+                                                           const Mask& with_normal);
+nlohmann::json FrameCheckJson(const integrate::FrameCheckResult& r);
 
 // The solver's options from the command's flags and the capture's material.json.
 solve::NormalOptions NormalOptionsFor(const NormalsCommandOptions& o, const io::Dataset& d);

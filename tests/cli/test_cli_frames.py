@@ -75,6 +75,24 @@ def test_strict_refuses_the_file_and_writes_nothing(sphere, tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+def test_in_bands_of_rows_the_same_check_runs_on_the_field_averaged_down(sphere, tmp_path):
+    lights = tmp_path / "lights.txt"
+    write_lights(sphere / "light_directions.txt", lights, SLIPS["swapped"][0])
+    code, _, err = run("normals", sphere, "--lights", lights, "-o", tmp_path / "out",
+                       "--band-rows", "20")
+    assert code == 0, err
+    warnings = frame_warnings(err)
+    assert len(warnings) == 1 and "read with x and y swapped" in warnings[0], err
+    check = json.loads((tmp_path / "out" / "metrics.json").read_text())["frame_check"]
+    assert check["better"] == "x and y swapped"
+    code, _, err = run("normals", sphere, "--lights", lights, "-o", tmp_path / "strict",
+                       "--band-rows", "20", "--strict")
+    assert code == 1 and "look like another frame" in err, err
+    assert not (tmp_path / "strict").exists()
+    code, _, err = run("normals", sphere, "-o", tmp_path / "right", "--band-rows", "20")
+    assert code == 0 and not frame_warnings(err), err
+
+
 def test_the_right_file_says_nothing(sphere, tmp_path):
     code, _, err = run("normals", sphere, "-o", tmp_path / "out", "--strict")
     assert code == 0, err
