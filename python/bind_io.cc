@@ -43,6 +43,14 @@ void RequireSize(const ImageF& image, int width, int height, const char* what) {
 }  // namespace
 
 void BindIo(py::module_& m) {
+  // "" when `bytes` fit the limit max_memory_gb= gives (or the default), else the refusal's
+  // text: the wrappers check an array's copies before numpy makes them.
+  m.def(
+      "_check_memory",
+      [](double bytes, const py::object& max_memory_gb, const std::string& what) {
+        return MemoryLimitFrom(max_memory_gb).Check(bytes, what);
+      },
+      py::arg("bytes"), py::arg("max_memory_gb"), py::arg("what"));
   m.def(
       "_srgb_to_linear",
       [](const py::array_t<float, py::array::c_style | py::array::forcecast>& values) {

@@ -80,7 +80,7 @@ def shade(normal, view=(0.0, 0.0, 1.0), material=None, lights=None, ambient=0.0,
 shade.__doc__ = _core.shade.__doc__
 
 
-def _image_stack(images, k, encoding):
+def _image_stack(images, k, encoding, max_memory_gb=None):
     """images as (K, H, W, 3) float32 linear, with a message that says what to do otherwise."""
     if encoding not in (None, "linear", "srgb"):
         raise ValueError(f"encoding: expected None, 'linear' or 'srgb', got {encoding!r}")
@@ -90,6 +90,14 @@ def _image_stack(images, k, encoding):
         raise TypeError(f"images: expected a numpy array (K, H, W, 3), got {type(images).__name__}") from None
     if a.dtype.kind not in "fiu" or a.dtype == bool:
         raise TypeError(f"images: expected numbers, got an array of {a.dtype}")
+    # A broadcast view (numpy.broadcast_to) costs nothing until it is copied: its float32 RGB copy
+    # and iphong's own are counted against the limit first, so a size that cannot fit is
+    # iphong's ValueError with the figure, not numpy's MemoryError in the middle of a copy.
+    channels = 3 if a.ndim == 3 else 1
+    refusal = _core._check_memory(2.0 * 4 * a.size * channels, max_memory_gb,
+                                  f"images: copying an array of shape {a.shape} to float32")
+    if refusal:
+        raise ValueError(refusal)
     if a.dtype.kind in "iu":
         top = _np.iinfo(a.dtype).max
         if encoding is None:
@@ -130,7 +138,7 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     except TypeError:
         raise TypeError("light_directions: expected a (K, 3) array, got "
                         f"{type(light_directions).__name__}") from None
-    images = _image_stack(images, k, encoding)
+    images = _image_stack(images, k, encoding, kwargs.get("max_memory_gb"))
     if isinstance(material, Material) and not any(material.kd):
         # An iphong.Material made without kd has kd 0: the albedo is unknown, not black.
         material = {k: v for k, v in _material_dict(material).items() if k != "kd"}

@@ -172,3 +172,16 @@ def test_a_nan_in_a_float_capture_is_named_on_load(tmp_path):
                                          r"finite \(NaN or infinite; the first at column \d+, "
                                          r"row \d+\)"):
         iphong.load_dataset(folder)
+
+
+def test_a_huge_broadcast_array_is_iphongs_value_error_not_numpys_memory_error():
+    """numpy.broadcast_to makes a 2.9 TB array for free; the wrapper's float32 copy used to fail
+    with numpy's MemoryError (or take the machine) before iphong checked the size."""
+    huge = np.broadcast_to(np.float32(0.5), (12, 100000, 100000, 3))
+    directions = np.tile([[0.0, 0.0, 1.0]], (12, 1))
+    with pytest.raises(ValueError, match=r"images: copying an array of shape \(12, 100000, "
+                                         r"100000, 3\) to float32 needs 2880\.0 GB, more than the "
+                                         r"memory limit of .* \(raise it with max_memory_gb=\)"):
+        iphong.estimate_normals(huge, directions)
+    with pytest.raises(ValueError, match=r"more than the memory limit of 1 kB"):
+        iphong.estimate_normals(huge[:, :8, :8], directions, max_memory_gb="1kB")
