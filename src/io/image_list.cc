@@ -52,11 +52,12 @@ bool LooksLikeImageList(const fs::path& file) {
 ImageList ReadImageList(const fs::path& list, const fs::path& capture_dir) {
   ImageList out;
   out.path = list.string();
-  const std::vector<std::string> entries = ParseFilenames(ReadTextFile(out.path), out.path);
+  // Read once: the same text gives the entries and their line numbers.
+  const std::string text = ReadTextFile(out.path);
+  const std::vector<std::string> entries = ParseFilenames(text, out.path);
   // ParseFilenames keeps non-blank lines only; their line numbers are recovered for messages.
   std::vector<std::size_t> lines;
   {
-    const std::string text = ReadTextFile(out.path);
     std::size_t number = 0, start = 0;
     while (start <= text.size() && lines.size() < entries.size()) {
       std::size_t end = text.find('\n', start);
