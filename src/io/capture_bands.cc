@@ -36,9 +36,11 @@ void CaptureBands::OpenReaders() {
   const std::string reference = d.files.mask_path.empty()
                                     ? d.filenames[0]
                                     : std::filesystem::path(d.files.mask_path).filename().string();
-  for (const std::string& path : d.files.paths) {
-    auto reader = std::make_unique<ImageRowReader>(path);
+  for (std::size_t j = 0; j < d.files.paths.size(); ++j) {
+    const std::string& path = d.files.paths[j];
+    auto reader = std::make_unique<ImageRowReader>(path, d.orientation);
     const ImageHeader& h = reader->header();
+    s.p.d.image_counts[j].orientation = h.orientation;
     if (h.width != d.file_width || h.height != d.file_height) {
       throw std::runtime_error(path + ": is " + SizeText(h.width, h.height) + ", but " + reference +
                                " is " + SizeText(d.file_width, d.file_height));

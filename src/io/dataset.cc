@@ -31,14 +31,19 @@ using internal::ToRgb;
 
 // One image of a dataset, refused from its header when its size is not the dataset's
 // (`reference` names the file that set it).
-ImageF ReadDatasetImage(const std::string& path, int width, int height,
-                        const std::string& reference, const MemoryLimit& memory) {
-  return ToRgb(ReadImage(path, memory, [&](const ImageHeader& h) {
-    if (h.width != width || h.height != height) {
-      Fail(path, "is " + SizeText(h.width, h.height) + ", but " + reference + " is " +
-                     SizeText(width, height));
-    }
-  }));
+ImageF ReadDatasetImage(const std::string& path, int width, int height, int orientation,
+                        const std::string& reference, const MemoryLimit& memory,
+                        ImageCounts* counts) {
+  return ToRgb(ReadImage(
+      path, memory,
+      [&](const ImageHeader& h) {
+        if (counts) counts->orientation = h.orientation;
+        if (h.width != width || h.height != height) {
+          Fail(path, "is " + SizeText(h.width, h.height) + ", but " + reference + " is " +
+                         SizeText(width, height));
+        }
+      },
+      orientation));
 }
 
 // Ground truth must be a map of unit normals (0 outside the object), not zeros or noise.
@@ -104,6 +109,7 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
     const StoredEncoding stored = ReadStoredEncoding(first);  // its header too: one open
     d.file_width = stored.header.width;
     d.file_height = stored.header.height;
+    d.orientation = stored.header.orientation;
     d.encoding = ChooseEncoding(d.files, options.capture, stored);
     p.integer_files = !stored.is_float;
   } else {
@@ -258,7 +264,9 @@ ImageF ReadWorkingImage(const Prepared& p, std::size_t j, const std::string& ref
   const Dataset& d = p.d;
   const int rows = p.crop.width > 0 ? p.crop.height : d.file_height;
   return internal::WorkingRows(
-      p, ReadDatasetImage(d.files.paths[j], d.file_width, d.file_height, reference, options.memory),
+      p,
+      ReadDatasetImage(d.files.paths[j], d.file_width, d.file_height, d.orientation, reference,
+                       options.memory, counts),
       p.crop.width > 0 ? p.crop.y : 0, rows, 0, options.capture.downscale, counts,
       d.files.paths[j]);
 }
@@ -282,6 +290,13 @@ std::string DescribeDataset(const Dataset& d) {
   if (d.mask.width > 0 && (d.mask.width != d.file_width || d.mask.height != d.file_height)) {
     text += "; " + SizeText(d.file_width, d.file_height) + " read as " +
             SizeText(d.mask.width, d.mask.height);
+  }
+  if (d.orientation != 1) {
+    const bool swap = OrientationSwapsAxes(d.orientation);
+    text += "; EXIF orientation " + std::to_string(d.orientation) + " of " + f.names[0] +
+            " applied to every photo: " + DescribeOrientation(d.orientation) + " (stored " +
+            SizeText(swap ? d.file_height : d.file_width, swap ? d.file_width : d.file_height) +
+            ")";
   }
   text += "; ground truth " +
           (f.ground_truth_path.empty() ? std::string("none") : base(f.ground_truth_path));
@@ -308,13 +323,28 @@ std::string DescribeImageCounts(const Dataset& d) {
   }
   std::string text;
   char line[256];
+  std::size_t turned = 0, first_turned = 0;
+  for (std::size_t j = 0; j < d.image_counts.size(); ++j) {
+    if (d.image_counts[j].pixels > 0 && d.image_counts[j].orientation != d.orientation) {
+      if (turned++ == 0) first_turned = j;
+    }
+  }
+  if (turned > 0) {
+    text = std::to_string(turned) + " of " + std::to_string(d.image_counts.size()) +
+           " images state another EXIF orientation than " + d.filenames[0] + " (" +
+           d.filenames[first_turned] + ": " +
+           DescribeOrientation(d.image_counts[first_turned].orientation) +
+           "); all are read as " + d.filenames[0] +
+           " is, since a camera on a mount does not turn between shots: check that the photos "
+           "line up";
+  }
   if (clipped_images > 0) {
     std::snprintf(line, sizeof line,
                   "%zu of %zu images have more than 1%% of the mask clipped at the format's "
                   "maximum (most: %s, %.1f%%); clipped values are left out of the fit",
                   clipped_images, d.image_counts.size(), d.filenames[worst_saturated].c_str(),
                   100 * saturated_fraction);
-    text = line;
+    text += (text.empty() ? "" : "; ") + std::string(line);
   }
   if (black_images > 0) {
     std::snprintf(line, sizeof line,

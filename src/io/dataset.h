@@ -27,13 +27,18 @@ namespace iphong::io {
 // maximum in some channel (clipped: the true value is unknown) and pixels zero in every channel.
 struct ImageCounts {
   std::size_t pixels = 0, saturated = 0, black = 0;
+  int orientation = 1;  // the EXIF orientation the file states (io/image_io.h)
 };
 
 struct Dataset {
   std::string directory;
   CaptureFiles files;                     // what was found where
   EncodingChoice encoding;                // how the image values were read
-  int file_width = 0, file_height = 0;    // the files' size, before --crop and --downscale
+  int file_width = 0, file_height = 0;    // the files' size as displayed, before --crop/--downscale
+  // The EXIF orientation every photo is read under: the one the first states. A camera on a mount
+  // does not turn between shots, so photos that state another are read as the first is (their
+  // stored pixels line up; DescribeImageCounts says so).
+  int orientation = 1;
   std::vector<ImageCounts> image_counts;  // per image, filled as the images are read
   std::vector<std::string> filenames;
   std::vector<ImageF> images;            // linear float RGB, one per light

@@ -58,7 +58,10 @@ std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHead
                    std::to_string(spec.nchannels) +
                    ", more than iphong handles (2^31 pixels, 64 channels)");
   }
-  *header = {spec.width, spec.height, spec.nchannels};
+  int orientation = spec.get_int_attribute("Orientation", 1);
+  if (orientation < 1 || orientation > 8) orientation = 1;  // what viewers do with a bad tag
+  *header = {spec.width, spec.height, spec.nchannels, orientation};
+  if (OrientationSwapsAxes(orientation)) std::swap(header->width, header->height);
   return in;
 }
 
@@ -72,7 +75,51 @@ std::unique_ptr<OIIO::ImageInput> OpenImageChecked(const std::string& path, Imag
 
 bool IsFloatImagePath(const std::string& path) { return IsFloatFormat(path); }
 
+ImageHeader Oriented(const ImageHeader& file_header, int orientation) {
+  if (orientation < 0 || orientation > 8) {
+    throw std::logic_error("EXIF orientation " + std::to_string(orientation) + " is not 0-8");
+  }
+  if (orientation == kFileOrientation) return file_header;
+  ImageHeader h = file_header;
+  if (OrientationSwapsAxes(file_header.orientation) != OrientationSwapsAxes(orientation)) {
+    std::swap(h.width, h.height);
+  }
+  return h;
+}
+
+ImageF Reorient(const ImageF& stored, int orientation) {
+  if (orientation == 1) return stored;
+  const bool swap = OrientationSwapsAxes(orientation);
+  ImageF shown(swap ? stored.height : stored.width, swap ? stored.width : stored.height,
+               stored.channels);
+  const int c = stored.channels;
+  for (int y = 0; y < shown.height; ++y) {
+    for (int x = 0; x < shown.width; ++x) {
+      int sx, sy;
+      StoredPixel(orientation, stored.width, stored.height, x, y, &sx, &sy);
+      const float* from = stored.pixels.data() + (std::size_t(sy) * stored.width + sx) * c;
+      std::copy(from, from + c, shown.pixels.data() + (std::size_t(y) * shown.width + x) * c);
+    }
+  }
+  return shown;
+}
+
 }  // namespace internal
+
+bool OrientationSwapsAxes(int orientation) { return orientation >= 5 && orientation <= 8; }
+
+std::string DescribeOrientation(int orientation) {
+  switch (orientation) {
+    case 2: return "mirrored left-right";
+    case 3: return "turned 180°";
+    case 4: return "mirrored top-bottom";
+    case 5: return "transposed (mirrored and turned)";
+    case 6: return "turned 90° clockwise";
+    case 7: return "transversed (mirrored and turned)";
+    case 8: return "turned 90° counter-clockwise";
+    default: return "as stored";
+  }
+}
 
 float LinearToSrgb(float linear) {
   const float x = std::clamp(linear, 0.0f, 1.0f);
@@ -148,19 +195,22 @@ ImageHeader ReadImageHeader(const std::string& path) {
 }
 
 ImageF ReadImage(const std::string& path, const MemoryLimit& memory,
-                 const std::function<void(const ImageHeader&)>& check) {
-  ImageHeader h;
-  auto in = OpenChecked(path, &h);
+                 const std::function<void(const ImageHeader&)>& check, int orientation) {
+  ImageHeader file;
+  auto in = OpenChecked(path, &file);
+  const ImageHeader h = internal::Oriented(file, orientation);
   if (check) check(h);
-  // The float image, and the decoder's own buffer of at most the same size.
+  const int turn = orientation == kFileOrientation ? file.orientation : orientation;
+  // The float image, and the decoder's own buffer (or the turned copy) of at most the same size.
   RequireMemory(memory, 2.0 * h.width * h.height * h.channels * sizeof(float),
                 path + ": decoding this " + SizeText(h.width, h.height) + " image");
-  ImageF image(h.width, h.height, h.channels);
+  const OIIO::ImageSpec& spec = in->spec();
+  ImageF image(spec.width, spec.height, h.channels);
   if (!in->read_image(0, 0, 0, h.channels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
     Fail(path, "cannot decode: " + in->geterror());
   }
   in->close();
-  return image;
+  return turn == 1 ? image : internal::Reorient(image, turn);
 }
 
 namespace {

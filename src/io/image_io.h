@@ -31,8 +31,20 @@ struct WriteOptions {
 // OutputError naming the file.
 void WriteImage(const std::string& path, const ImageF& image, const WriteOptions& options = {});
 
+// EXIF orientation (TIFF tag 274, JPEG Exif): how a viewer turns or mirrors the stored pixels
+// to display them. 1 = as stored; 2 mirrored left-right; 3 turned 180°; 4 mirrored top-bottom;
+// 5 transposed; 6 turned 90° clockwise; 7 transverse; 8 turned 90° counter-clockwise. iphong reads
+// images as they are displayed (a mask drawn on the displayed photo fits it), so rows and columns
+// everywhere are displayed ones.
+constexpr int kFileOrientation = 0;  // "the orientation the file states"
+// True for 5–8, where the displayed width is the stored height.
+bool OrientationSwapsAxes(int orientation);
+// "turned 90° clockwise", "mirrored left-right", ...; "as stored" for 1.
+std::string DescribeOrientation(int orientation);
+
 struct ImageHeader {
-  int width = 0, height = 0, channels = 0;
+  int width = 0, height = 0, channels = 0;  // as displayed (after the orientation)
+  int orientation = 1;                      // as the file states it (1 when it states none)
 };
 
 // The size a file declares, read from its header only. Refuses what is not a regular file, a
@@ -42,12 +54,14 @@ struct ImageHeader {
 ImageHeader ReadImageHeader(const std::string& path);
 
 // Reads any format OpenImageIO knows into linear float, integer formats scaled to [0, 1]
-// (no transfer curve is undone). Checks the header first (ReadImageHeader); then `check`, when
-// given, sees it and may throw (a size that is not the dataset's, a mesh budget); then the memory
-// the decoded image needs is checked against `memory` (ResourceError). Nothing is allocated
-// before. Throws std::runtime_error naming the file.
+// (no transfer curve is undone), turned as displayed: by `orientation` (1–8), or by the one the
+// file states (kFileOrientation). Checks the header first (ReadImageHeader); then `check`, when
+// given, sees it (its size as displayed under the orientation applied) and may throw (a size that
+// is not the dataset's, a mesh budget); then the memory the decoded image needs is checked against
+// `memory` (ResourceError). Nothing is allocated before. Throws std::runtime_error naming the file.
 ImageF ReadImage(const std::string& path, const MemoryLimit& memory = {},
-                 const std::function<void(const ImageHeader&)>& check = {});
+                 const std::function<void(const ImageHeader&)>& check = {},
+                 int orientation = kFileOrientation);
 
 // How a file stores its values, and what it states about their encoding. Formats that state one:
 // JPEG (display-encoded, sRGB, by the format's own convention), PNG with an sRGB, iCCP or gAMA

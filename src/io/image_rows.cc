@@ -17,19 +17,58 @@
 
 namespace iphong::io {
 
-ImageRowReader::ImageRowReader(const std::string& path)
-    : path_(path), in_(internal::OpenImageChecked(path, &header_)) {}
+ImageRowReader::ImageRowReader(const std::string& path, int orientation) : path_(path) {
+  ImageHeader file;
+  in_ = internal::OpenImageChecked(path, &file);
+  header_ = internal::Oriented(file, orientation);
+  orientation_ = orientation == kFileOrientation ? file.orientation : orientation;
+  stored_width_ = in_->spec().width;
+  stored_height_ = in_->spec().height;
+}
+
+ImageF ImageRowReader::ReadStoredRows(int y0, int y1, int shown_y0, int shown_y1) {
+  ImageF band(stored_width_, y1 - y0, header_.channels);
+  if (!in_->read_scanlines(0, 0, y0, y1, 0, 0, header_.channels, OIIO::TypeDesc::FLOAT,
+                           band.pixels.data())) {
+    throw std::runtime_error(path_ + ": cannot decode rows " + std::to_string(shown_y0) + ".." +
+                             std::to_string(shown_y1 - 1) + ": " + OneLine(in_->geterror()));
+  }
+  return band;
+}
 
 ImageF ImageRowReader::ReadRows(int y0, int y1) {
   if (y0 < 0 || y1 > header_.height || y1 <= y0) {
     throw std::logic_error(path_ + ": rows " + std::to_string(y0) + ".." + std::to_string(y1) +
                            " outside the image");
   }
-  ImageF band(header_.width, y1 - y0, header_.channels);
-  if (!in_->read_scanlines(0, 0, y0, y1, 0, 0, header_.channels, OIIO::TypeDesc::FLOAT,
-                           band.pixels.data())) {
-    throw std::runtime_error(path_ + ": cannot decode rows " + std::to_string(y0) + ".." +
-                             std::to_string(y1 - 1) + ": " + OneLine(in_->geterror()));
+  const int c = header_.channels;
+  if (orientation_ == 1) return ReadStoredRows(y0, y1, y0, y1);
+  ImageF band(header_.width, y1 - y0, c);
+  auto put = [&](const ImageF& stored, int stored_y0) {
+    for (int y = y0; y < y1; ++y) {
+      for (int x = 0; x < header_.width; ++x) {
+        int sx, sy;
+        internal::StoredPixel(orientation_, stored_width_, stored_height_, x, y, &sx, &sy);
+        if (sy < stored_y0 || sy >= stored_y0 + stored.height) continue;
+        const float* from = stored.pixels.data() + (std::size_t(sy - stored_y0) * stored.width + sx) * c;
+        std::copy(from, from + c, band.pixels.data() + (std::size_t(y - y0) * band.width + x) * c);
+      }
+    }
+  };
+  if (!OrientationSwapsAxes(orientation_)) {
+    // A mirror or half turn keeps rows rows: the same count of stored rows, maybe from the bottom.
+    const bool flipped = orientation_ == 3 || orientation_ == 4;
+    const int s0 = flipped ? stored_height_ - y1 : y0, s1 = flipped ? stored_height_ - y0 : y1;
+    put(ReadStoredRows(s0, s1, y0, y1), s0);
+    return band;
+  }
+  // A quarter turn: every stored row holds a piece of these displayed rows. Slices of stored rows
+  // about as large as the band keep memory at twice the band's.
+  const int slice = std::max<int>(
+      1, static_cast<int>(std::min<double>(stored_height_,
+                                           double(y1 - y0) * header_.width / stored_width_)));
+  for (int s0 = 0; s0 < stored_height_; s0 += slice) {
+    put(ReadStoredRows(s0, std::min(stored_height_, s0 + slice), y0, y1), s0);
   }
   return band;
 }

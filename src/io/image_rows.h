@@ -12,20 +12,26 @@
 
 namespace iphong::io {
 
-// Decodes rows of one image file; formats that only decode forward (PNG, JPEG) are reopened by
-// OpenImageIO when a pass starts again at the top.
+// Decodes rows of one image file, as displayed under an EXIF orientation (io/image_io.h); formats
+// that only decode forward (PNG, JPEG) are reopened by OpenImageIO when a pass starts again at the
+// top. Under a quarter turn (orientation 5–8) a displayed row is a stored column: each band then
+// decodes the whole file, a slice of stored rows at a time (memory stays a band's; time grows
+// with the number of bands).
 class ImageRowReader {
  public:
   // Throws std::runtime_error naming the file when it is not an image.
-  explicit ImageRowReader(const std::string& path);
-  const ImageHeader& header() const { return header_; }
-  // Rows [y0, y1) as float values, header().channels per pixel (integer formats scaled to 0..1,
-  // as ReadImage). Throws std::runtime_error "PATH: cannot decode rows Y0..Y1-1: why".
+  explicit ImageRowReader(const std::string& path, int orientation = kFileOrientation);
+  const ImageHeader& header() const { return header_; }  // as displayed
+  // Displayed rows [y0, y1) as float values, header().channels per pixel (integer formats scaled
+  // to 0..1, as ReadImage). Throws std::runtime_error "PATH: cannot decode rows Y0..Y1-1: why".
   ImageF ReadRows(int y0, int y1);
 
  private:
+  ImageF ReadStoredRows(int y0, int y1, int shown_y0, int shown_y1);  // stored rows [y0, y1)
   std::string path_;
   ImageHeader header_;
+  int orientation_ = 1;                    // the one applied
+  int stored_width_ = 0, stored_height_ = 0;
   std::unique_ptr<OIIO::ImageInput> in_;
 };
 

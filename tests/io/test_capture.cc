@@ -1,5 +1,6 @@
 // Capture folders of every layout: which images, lights, mask and encoding are found, in which
 // order, and the one-line errors when they do not match.
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,6 +12,8 @@
 #include "io/capture.h"
 #include "io/dataset.h"
 #include "io/dataset_text.h"
+#include "io/capture_bands.h"
+#include "io/image_internal.h"
 #include "io/image_io.h"
 
 namespace iphong::io {
@@ -273,6 +276,94 @@ TEST_F(Capture, CropAndDownscaleApplyToImagesMaskAndCounts) {
   EXPECT_NE(
       ErrorOf([&] { LoadDataset(dir_.string(), options); }).find("reaches outside the 8x6 image"),
       std::string::npos);
+}
+
+
+// Phone photos store the sensor's pixels and state how to turn them (EXIF orientation); the user
+// draws the mask on the photo as displayed. Read turned, whole and in bands, they are the upright
+// capture; a photo stating another turn is read as the first (a mounted camera does not turn).
+TEST_F(Capture, ExifOrientationIsAppliedToEveryPhotoAsTheFirstStates) {
+  const int w = 6, h = 4;  // displayed
+  std::vector<ImageF> upright;
+  Mask mask(w, h, true);
+  mask.inside[0] = mask.inside[w + 2] = 0;
+  for (int i = 0; i < 3; ++i) {
+    ImageF image(w, h, 3);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c) image.at(x, y)[c] = ((x + 3 * y + 5 * i + c) % 11) / 16.0f;
+    upright.push_back(image);
+  }
+  const std::string lights = "0 0 1\n0.6 0 0.8\n0 0.6 0.8\n";
+  ImageF mask_image(w, h, 1, 0.0f);
+  for (int p = 0; p < w * h; ++p) mask_image.pixels[p] = mask.inside[p] ? 1.0f : 0.0f;
+  auto make = [&](const fs::path& dir, const std::vector<int>& orientations) {
+    fs::create_directories(dir);
+    Write(dir / "lights.txt", lights);
+    WriteImage((dir / "mask.png").string(), mask_image, {8, Encoding::kData});
+    for (int i = 0; i < 3; ++i) {
+      const int o = orientations[i];
+      // The stored pixels a camera turned by `o` would have written (the first photo's turn:
+      // all three share the sensor's frame).
+      const int turn = orientations[0];
+      const bool swap = OrientationSwapsAxes(turn);
+      ImageF stored(swap ? h : w, swap ? w : h, 3);
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          int sx, sy;
+          internal::StoredPixel(turn, stored.width, stored.height, x, y, &sx, &sy);
+          for (int c = 0; c < 3; ++c) stored.at(sx, sy)[c] = upright[i].at(x, y)[c];
+        }
+      const std::string path = (dir / ("img" + std::to_string(i + 1) + ".tif")).string();
+      OIIO::ImageSpec spec(stored.width, stored.height, 3, OIIO::TypeDesc::FLOAT);
+      spec.attribute("Orientation", o);
+      auto out = OIIO::ImageOutput::create(path);
+      ASSERT_TRUE(out && out->open(path, spec) &&
+                  out->write_image(OIIO::TypeDesc::FLOAT, stored.pixels.data()) && out->close());
+    }
+  };
+  make(root_ / "upright", {1, 1, 1});
+  make(root_ / "turned", {6, 6, 6});
+  make(root_ / "mixed", {8, 8, 1});  // the third photo's sensor flipped its statement
+  const ObservationSet reference = LoadObservations((root_ / "upright").string());
+  EXPECT_EQ(DescribeDataset(reference.dataset).find("EXIF"), std::string::npos);
+  for (const char* name : {"turned", "mixed"}) {
+    SCOPED_TRACE(name);
+    const std::string dir = (root_ / name).string();
+    const ObservationSet set = LoadObservations(dir);
+    EXPECT_EQ(set.observations.pixels, reference.observations.pixels);
+    EXPECT_EQ(set.observations.values, reference.observations.values);
+    const Dataset whole = LoadDataset(dir);
+    for (int i = 0; i < 3; ++i) EXPECT_EQ(whole.images[i].pixels, upright[i].pixels);
+    CaptureBands bands(dir, {});
+    for (int y0 = 0; y0 < h; y0 += 3) {
+      const solve::PhotometricData band = bands.ReadBand(y0, std::min(h, y0 + 3), true);
+      for (std::size_t q = 0; q < band.pixel_count(); ++q) {
+        const int p = band.pixels[q] + y0 * w;
+        const auto at = std::find(reference.observations.pixels.begin(),
+                                  reference.observations.pixels.end(), p) -
+                        reference.observations.pixels.begin();
+        for (int k = 0; k < 9; ++k)
+          EXPECT_EQ(band.pixel(q)[k], reference.observations.pixel(at)[k]) << p;
+      }
+    }
+    const std::string said = DescribeDataset(set.dataset);
+    const std::string counts = DescribeImageCounts(set.dataset);
+    if (std::string(name) == "turned") {
+      EXPECT_NE(said.find("EXIF orientation 6 of img1.tif applied to every photo: turned 90° "
+                          "clockwise (stored 4x6)"),
+                std::string::npos)
+          << said;
+      EXPECT_EQ(counts.find("EXIF"), std::string::npos) << counts;
+    } else {
+      EXPECT_NE(counts.find("1 of 3 images state another EXIF orientation than img1.tif "
+                            "(img3.tif: as stored)"),
+                std::string::npos)
+          << counts;
+      EXPECT_NE(DescribeImageCounts(bands.dataset()).find("1 of 3 images state another"),
+                std::string::npos);
+    }
+  }
 }
 
 }  // namespace

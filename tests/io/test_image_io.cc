@@ -5,7 +5,11 @@
 #include <filesystem>
 #include <fstream>
 
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+
 #include "io/image_io.h"
+#include "io/image_rows.h"
 
 namespace iphong::io {
 namespace {
@@ -90,6 +94,101 @@ TEST_F(ImageIoTest, CorruptAndMissingFilesAreNamedInTheError) {
   }
 }
 
+// EXIF orientation: every code read as the Exif standard (CIPA DC-008, tag 274) defines it, whole
+// and in bands. OpenImageIO's ImageBufAlgo::reorient agrees on six codes; on 5 and 7 it swaps the
+// two (OpenImageIO issue #4661, fixed after 2.5), which is why iphong maps pixels itself.
+class OrientationTest : public ImageIoTest {
+ protected:
+  // A float TIFF of `stored` stating `orientation` (TIFF's own tag 274; JPEG carries it in Exif).
+  void WriteStated(const std::string& path, const ImageF& stored, int orientation) {
+    OIIO::ImageSpec spec(stored.width, stored.height, stored.channels, OIIO::TypeDesc::FLOAT);
+    spec.attribute("Orientation", orientation);
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out && out->open(path, spec) &&
+                out->write_image(OIIO::TypeDesc::FLOAT, stored.pixels.data()) && out->close());
+  }
+  // The standard's table: where the stored 0th row and 0th column are seen.
+  static ImageF Standard(const ImageF& stored, int orientation) {
+    enum Side { kTop, kBottom, kLeft, kRight };
+    const Side row0[9] = {kTop, kTop, kTop, kBottom, kBottom, kLeft, kRight, kRight, kLeft};
+    const Side col0[9] = {kLeft, kLeft, kRight, kRight, kLeft, kTop, kTop, kBottom, kBottom};
+    const bool sideways = row0[orientation] == kLeft || row0[orientation] == kRight;
+    const int w = stored.width, h = stored.height;
+    ImageF shown(sideways ? h : w, sideways ? w : h, stored.channels);
+    for (int sy = 0; sy < h; ++sy) {
+      for (int sx = 0; sx < w; ++sx) {
+        int x, y;
+        if (!sideways) {
+          y = row0[orientation] == kTop ? sy : h - 1 - sy;
+          x = col0[orientation] == kLeft ? sx : w - 1 - sx;
+        } else {
+          x = row0[orientation] == kLeft ? sy : h - 1 - sy;
+          y = col0[orientation] == kTop ? sx : w - 1 - sx;
+        }
+        for (int c = 0; c < stored.channels; ++c) shown.at(x, y)[c] = stored.at(sx, sy)[c];
+      }
+    }
+    return shown;
+  }
+  // What OpenImageIO's reorient shows.
+  static ImageF Reoriented(const std::string& path) {
+    OIIO::ImageBuf file(path);
+    OIIO::ImageBuf shown = OIIO::ImageBufAlgo::reorient(file);
+    const OIIO::ImageSpec& spec = shown.spec();
+    ImageF image(spec.width, spec.height, spec.nchannels);
+    EXPECT_TRUE(shown.get_pixels(shown.roi(), OIIO::TypeDesc::FLOAT, image.pixels.data()));
+    return image;
+  }
+};
+
+TEST_F(OrientationTest, EveryCodeIsReadAsViewersShowIt) {
+  const ImageF stored = Ramp(7, 4);
+  for (int orientation = 1; orientation <= 8; ++orientation) {
+    SCOPED_TRACE("orientation " + std::to_string(orientation));
+    const std::string path = Path("o" + std::to_string(orientation) + ".tif");
+    WriteStated(path, stored, orientation);
+    const ImageF expected = Standard(stored, orientation);
+    ASSERT_EQ(expected.width, OrientationSwapsAxes(orientation) ? 4 : 7);
+    if (orientation != 5 && orientation != 7) {
+      EXPECT_EQ(Reoriented(path).pixels, expected.pixels);
+    }
+    const ImageHeader header = ReadImageHeader(path);
+    EXPECT_EQ(header.orientation, orientation);
+    EXPECT_EQ(header.width, expected.width);
+    EXPECT_EQ(header.height, expected.height);
+    const ImageF read = ReadImage(path);
+    ASSERT_EQ(read.width, expected.width);
+    ASSERT_EQ(read.height, expected.height);
+    EXPECT_EQ(read.pixels, expected.pixels);
+    // Bands of displayed rows, of every height, give the same rows.
+    for (int band = 1; band <= expected.height; ++band) {
+      ImageRowReader reader(path);
+      for (int y0 = 0; y0 < expected.height; y0 += band) {
+        const int y1 = std::min(expected.height, y0 + band);
+        const ImageF rows = reader.ReadRows(y0, y1);
+        ASSERT_EQ(rows.width, expected.width);
+        for (int y = y0; y < y1; ++y) {
+          for (int x = 0; x < rows.width; ++x) {
+            for (int c = 0; c < 3; ++c) {
+              ASSERT_EQ(rows.at(x, y - y0)[c], expected.at(x, y)[c]) << x << "," << y << " band " << band;
+            }
+          }
+        }
+      }
+    }
+    // Another orientation imposed (a capture reads every photo as its first): the stored pixels
+    // as that one shows them, whatever this file states.
+    const ImageF upright = ReadImage(path, {}, {}, 1);
+    EXPECT_EQ(upright.pixels, stored.pixels);
+    ImageHeader seen;
+    ReadImage(path, {}, [&](const ImageHeader& h) { seen = h; }, 6);
+    EXPECT_EQ(seen.width, 4);
+    EXPECT_EQ(seen.orientation, orientation);  // what the file states
+    EXPECT_EQ(ImageRowReader(path, 1).ReadRows(0, 4).pixels, stored.pixels);
+  }
+  EXPECT_EQ(DescribeOrientation(6), "turned 90° clockwise");
+}
+
 }  // namespace
 }  // namespace iphong::io
 
@@ -112,3 +211,4 @@ TEST(Srgb, TheTableGivesTheCurvesValues) {
 
 }  // namespace
 }  // namespace iphong::io
+
