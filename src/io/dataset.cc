@@ -263,12 +263,11 @@ ImageF ReadWorkingImage(const Prepared& p, std::size_t j, const std::string& ref
                         const DatasetLoadOptions& options, ImageCounts* counts) {
   const Dataset& d = p.d;
   const int rows = p.crop.width > 0 ? p.crop.height : d.file_height;
-  return internal::WorkingRows(
-      p,
-      ReadDatasetImage(d.files.paths[j], d.file_width, d.file_height, d.orientation, reference,
-                       options.memory, counts),
-      p.crop.width > 0 ? p.crop.y : 0, rows, 0, options.capture.downscale, counts,
-      d.files.paths[j]);
+  return internal::WorkingRows(p,
+                               ReadDatasetImage(d.files.paths[j], d.file_width, d.file_height,
+                                                d.orientation, reference, options.memory, counts),
+                               p.crop.width > 0 ? p.crop.y : 0, rows, 0, options.capture.downscale,
+                               counts, d.files.paths[j]);
 }
 
 }  // namespace
@@ -333,8 +332,8 @@ std::string DescribeImageCounts(const Dataset& d) {
     text = std::to_string(turned) + " of " + std::to_string(d.image_counts.size()) +
            " images state another EXIF orientation than " + d.filenames[0] + " (" +
            d.filenames[first_turned] + ": " +
-           DescribeOrientation(d.image_counts[first_turned].orientation) +
-           "); all are read as " + d.filenames[0] +
+           DescribeOrientation(d.image_counts[first_turned].orientation) + "); all are read as " +
+           d.filenames[0] +
            " is, since a camera on a mount does not turn between shots: check that the photos "
            "line up";
   }

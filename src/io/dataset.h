@@ -32,9 +32,9 @@ struct ImageCounts {
 
 struct Dataset {
   std::string directory;
-  CaptureFiles files;                     // what was found where
-  EncodingChoice encoding;                // how the image values were read
-  int file_width = 0, file_height = 0;    // the files' size as displayed, before --crop/--downscale
+  CaptureFiles files;                   // what was found where
+  EncodingChoice encoding;              // how the image values were read
+  int file_width = 0, file_height = 0;  // the files' size as displayed, before --crop/--downscale
   // The EXIF orientation every photo is read under: the one the first states. A camera on a mount
   // does not turn between shots, so photos that state another are read as the first is (their
   // stored pixels line up; DescribeImageCounts says so).

@@ -22,17 +22,33 @@ ImageHeader Oriented(const ImageHeader& file_header, int orientation);
 // stored_width × stored_height, as the Exif standard's table defines it (where the stored 0th row
 // and 0th column are seen). Written here, not left to ImageBufAlgo::reorient: OpenImageIO up to
 // 2.5 swaps codes 5 and 7 (its issue #4661), and bands need the mapping row by row.
-inline void StoredPixel(int orientation, int stored_width, int stored_height, int x, int y,
-                        int* sx, int* sy) {
+inline void StoredPixel(int orientation, int stored_width, int stored_height, int x, int y, int* sx,
+                        int* sy) {
   switch (orientation) {
-    case 2: *sx = stored_width - 1 - x, *sy = y; return;
-    case 3: *sx = stored_width - 1 - x, *sy = stored_height - 1 - y; return;
-    case 4: *sx = x, *sy = stored_height - 1 - y; return;
-    case 5: *sx = y, *sy = x; return;
-    case 6: *sx = y, *sy = stored_height - 1 - x; return;
-    case 7: *sx = stored_width - 1 - y, *sy = stored_height - 1 - x; return;
-    case 8: *sx = stored_width - 1 - y, *sy = x; return;
-    default: *sx = x, *sy = y; return;
+    case 2:
+      *sx = stored_width - 1 - x, *sy = y;
+      return;
+    case 3:
+      *sx = stored_width - 1 - x, *sy = stored_height - 1 - y;
+      return;
+    case 4:
+      *sx = x, *sy = stored_height - 1 - y;
+      return;
+    case 5:
+      *sx = y, *sy = x;
+      return;
+    case 6:
+      *sx = y, *sy = stored_height - 1 - x;
+      return;
+    case 7:
+      *sx = stored_width - 1 - y, *sy = stored_height - 1 - x;
+      return;
+    case 8:
+      *sx = stored_width - 1 - y, *sy = x;
+      return;
+    default:
+      *sx = x, *sy = y;
+      return;
   }
 }
 

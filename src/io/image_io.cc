@@ -110,14 +110,22 @@ bool OrientationSwapsAxes(int orientation) { return orientation >= 5 && orientat
 
 std::string DescribeOrientation(int orientation) {
   switch (orientation) {
-    case 2: return "mirrored left-right";
-    case 3: return "turned 180°";
-    case 4: return "mirrored top-bottom";
-    case 5: return "transposed (mirrored and turned)";
-    case 6: return "turned 90° clockwise";
-    case 7: return "transversed (mirrored and turned)";
-    case 8: return "turned 90° counter-clockwise";
-    default: return "as stored";
+    case 2:
+      return "mirrored left-right";
+    case 3:
+      return "turned 180°";
+    case 4:
+      return "mirrored top-bottom";
+    case 5:
+      return "transposed (mirrored and turned)";
+    case 6:
+      return "turned 90° clockwise";
+    case 7:
+      return "transversed (mirrored and turned)";
+    case 8:
+      return "turned 90° counter-clockwise";
+    default:
+      return "as stored";
   }
 }
 

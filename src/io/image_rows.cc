@@ -50,7 +50,8 @@ ImageF ImageRowReader::ReadRows(int y0, int y1) {
         int sx, sy;
         internal::StoredPixel(orientation_, stored_width_, stored_height_, x, y, &sx, &sy);
         if (sy < stored_y0 || sy >= stored_y0 + stored.height) continue;
-        const float* from = stored.pixels.data() + (std::size_t(sy - stored_y0) * stored.width + sx) * c;
+        const float* from =
+            stored.pixels.data() + (std::size_t(sy - stored_y0) * stored.width + sx) * c;
         std::copy(from, from + c, band.pixels.data() + (std::size_t(y - y0) * band.width + x) * c);
       }
     }
@@ -64,9 +65,9 @@ ImageF ImageRowReader::ReadRows(int y0, int y1) {
   }
   // A quarter turn: every stored row holds a piece of these displayed rows. Slices of stored rows
   // about as large as the band keep memory at twice the band's.
-  const int slice = std::max<int>(
-      1, static_cast<int>(std::min<double>(stored_height_,
-                                           double(y1 - y0) * header_.width / stored_width_)));
+  const int slice =
+      std::max<int>(1, static_cast<int>(std::min<double>(
+                           stored_height_, double(y1 - y0) * header_.width / stored_width_)));
   for (int s0 = 0; s0 < stored_height_; s0 += slice) {
     put(ReadStoredRows(s0, std::min(stored_height_, s0 + slice), y0, y1), s0);
   }

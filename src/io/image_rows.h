@@ -30,7 +30,7 @@ class ImageRowReader {
   ImageF ReadStoredRows(int y0, int y1, int shown_y0, int shown_y1);  // stored rows [y0, y1)
   std::string path_;
   ImageHeader header_;
-  int orientation_ = 1;                    // the one applied
+  int orientation_ = 1;  // the one applied
   int stored_width_ = 0, stored_height_ = 0;
   std::unique_ptr<OIIO::ImageInput> in_;
 };

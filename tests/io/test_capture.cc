@@ -10,9 +10,9 @@
 
 #include "error_of.h"
 #include "io/capture.h"
+#include "io/capture_bands.h"
 #include "io/dataset.h"
 #include "io/dataset_text.h"
-#include "io/capture_bands.h"
 #include "io/image_internal.h"
 #include "io/image_io.h"
 
@@ -277,7 +277,6 @@ TEST_F(Capture, CropAndDownscaleApplyToImagesMaskAndCounts) {
       ErrorOf([&] { LoadDataset(dir_.string(), options); }).find("reaches outside the 8x6 image"),
       std::string::npos);
 }
-
 
 // Phone photos store the sensor's pixels and state how to turn them (EXIF orientation); the user
 // draws the mask on the photo as displayed. Read turned, whole and in bands, they are the upright

@@ -170,7 +170,8 @@ TEST_F(OrientationTest, EveryCodeIsReadAsViewersShowIt) {
         for (int y = y0; y < y1; ++y) {
           for (int x = 0; x < rows.width; ++x) {
             for (int c = 0; c < 3; ++c) {
-              ASSERT_EQ(rows.at(x, y - y0)[c], expected.at(x, y)[c]) << x << "," << y << " band " << band;
+              ASSERT_EQ(rows.at(x, y - y0)[c], expected.at(x, y)[c])
+                  << x << "," << y << " band " << band;
             }
           }
         }
@@ -181,7 +182,8 @@ TEST_F(OrientationTest, EveryCodeIsReadAsViewersShowIt) {
     const ImageF upright = ReadImage(path, {}, {}, 1);
     EXPECT_EQ(upright.pixels, stored.pixels);
     ImageHeader seen;
-    ReadImage(path, {}, [&](const ImageHeader& h) { seen = h; }, 6);
+    ReadImage(
+        path, {}, [&](const ImageHeader& h) { seen = h; }, 6);
     EXPECT_EQ(seen.width, 4);
     EXPECT_EQ(seen.orientation, orientation);  // what the file states
     EXPECT_EQ(ImageRowReader(path, 1).ReadRows(0, 4).pixels, stored.pixels);
@@ -211,4 +213,3 @@ TEST(Srgb, TheTableGivesTheCurvesValues) {
 
 }  // namespace
 }  // namespace iphong::io
-
