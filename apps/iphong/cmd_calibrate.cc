@@ -184,6 +184,7 @@ void RunCalibrate(const CalibrateOptions& o) {
   io::CalibrationPictureInput picture;
   const ImageF brightest = Brightest(dataset.images);
   picture.background = &brightest;
+  picture.labels = io::ImageLabels(dataset.filenames);
   nlohmann::json per_image = nlohmann::json::array();
   std::string intensity_source;
 

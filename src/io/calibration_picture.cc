@@ -1,8 +1,11 @@
 #include "io/calibration_picture.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <opencv2/imgproc.hpp>
+#include <set>
 
 #include "io/image_io.h"
 
@@ -17,14 +20,40 @@ cv::Scalar Colour(int i) {  // BGR, distinct for neighbours
   return kColours[i % 6];
 }
 
-void Label(cv::Mat& canvas, int number, cv::Point at, const cv::Scalar& colour) {
-  cv::putText(canvas, std::to_string(number), at + cv::Point(5, -5), cv::FONT_HERSHEY_SIMPLEX, 0.4,
-              colour, 1, cv::LINE_AA);
+void Label(cv::Mat& canvas, const std::string& text, cv::Point at, const cv::Scalar& colour) {
+  cv::putText(canvas, text, at + cv::Point(5, -5), cv::FONT_HERSHEY_SIMPLEX, 0.4, colour, 1,
+              cv::LINE_AA);
 }
 
 }  // namespace
 
+std::vector<std::string> ImageLabels(const std::vector<std::string>& file_names) {
+  std::vector<std::string> labels;
+  std::set<std::string> seen;
+  for (const std::string& name : file_names) {
+    const std::string stem = std::filesystem::path(name).stem().string();
+    std::size_t end = stem.size();
+    while (end > 0 && !std::isdigit(static_cast<unsigned char>(stem[end - 1]))) --end;
+    std::size_t begin = end;
+    while (begin > 0 && std::isdigit(static_cast<unsigned char>(stem[begin - 1]))) --begin;
+    if (begin == end) break;
+    while (begin + 1 < end && stem[begin] == '0') ++begin;
+    labels.push_back(stem.substr(begin, end - begin));
+    if (!seen.insert(labels.back()).second) {
+      labels.clear();
+      break;
+    }
+  }
+  if (labels.size() == file_names.size()) return labels;
+  labels.clear();
+  for (std::size_t j = 0; j < file_names.size(); ++j) labels.push_back(std::to_string(j + 1));
+  return labels;
+}
+
 ImageF CalibrationPicture(const CalibrationPictureInput& in) {
+  auto label = [&](std::size_t j) {
+    return j < in.labels.size() ? in.labels[j] : std::to_string(j + 1);
+  };
   cv::Mat canvas(kPanel, 2 * kPanel, CV_8UC3, cv::Scalar(30, 30, 30));
   // Left: the region around the spheres, scaled to the panel.
   const ImageF& bg = *in.background;
@@ -75,7 +104,7 @@ ImageF CalibrationPicture(const CalibrationPictureInput& in) {
     for (const Vec2d& m : in.marks[j]) {
       const cv::Point p = to_left(m.x(), m.y());
       cv::circle(canvas, p, 4, Colour(int(j)), 1, cv::LINE_AA);
-      Label(canvas, int(j) + 1, p, Colour(int(j)));
+      Label(canvas, label(j), p, Colour(int(j)));
     }
   }
 
@@ -105,7 +134,7 @@ ImageF CalibrationPicture(const CalibrationPictureInput& in) {
         centre + cv::Point(int(std::lround(radius * l.x())), int(std::lround(-radius * l.y())));
     const cv::Scalar colour = l.z() < 0 ? cv::Scalar(60, 60, 255) : Colour(int(j));
     cv::circle(canvas, p, 3, colour, cv::FILLED, cv::LINE_AA);
-    Label(canvas, int(j) + 1, p, colour);
+    Label(canvas, label(j), p, colour);
   }
 
   ImageF out(canvas.cols, canvas.rows, 3);

@@ -9,6 +9,7 @@
 #include <iterator>
 
 #include "error_of.h"
+#include "io/calibration_picture.h"
 #include "io/capture.h"
 #include "io/capture_bands.h"
 #include "io/dataset.h"
@@ -363,6 +364,18 @@ TEST_F(Capture, ExifOrientationIsAppliedToEveryPhotoAsTheFirstStates) {
                 std::string::npos);
     }
   }
+}
+
+// The calibration picture numbers images as the folder's names do.
+TEST(ImageLabels, TheFilesOwnNumbersElsePositions) {
+  using V = std::vector<std::string>;
+  EXPECT_EQ(ImageLabels({"cat.0.tga", "cat.1.tga", "cat.11.tga"}), (V{"0", "1", "11"}));
+  EXPECT_EQ(ImageLabels({"001.png", "002.png", "010.png"}), (V{"1", "2", "10"}));
+  EXPECT_EQ(ImageLabels({"IMG_0013.JPG", "IMG_0014.JPG"}), (V{"13", "14"}));
+  // The last runs of digits repeat: positions.
+  EXPECT_EQ(ImageLabels({"shot3_v2.png", "shot4_v2.png"}), (V{"1", "2"}));
+  EXPECT_EQ(ImageLabels({"front.png", "side7.png"}), (V{"1", "2"}));
+  EXPECT_EQ(ImageLabels({"a/0.png", "b/00.png"}), (V{"1", "2"}));  // both are 0
 }
 
 }  // namespace
