@@ -81,7 +81,6 @@ ImageF RenderPreview(const geometry::TriangleMesh& mesh, const PreviewOptions& o
   scene.camera = geometry::Camera::Orthographic(options.width, height, extent);
   scene.camera.center =
       Vec3d(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), hi.z() + (hi - lo).norm() + 1);
-  scene.lighting.ambient = Rgb::Constant(0.2);
   scene.lighting.lights.push_back(
       reflectance::Light::Directional(Vec3d(-0.45, 0.6, 0.65), Rgb::Constant(0.85)));
   scene.lighting.lights.push_back(
@@ -90,10 +89,16 @@ ImageF RenderPreview(const geometry::TriangleMesh& mesh, const PreviewOptions& o
   if (options.texture) {
     clay.kd = Rgb::Ones();
     object.albedo_texture = NormalizedTexture(*options.texture);
+    // The light that fills the shadows comes from the viewer and is reflected by the surface's
+    // own colour: Phong's ambient ka is one constant (the texture tints only kd), so an ambient
+    // term would lift every pixel by the same grey and leave the colours pale.
+    scene.lighting.lights.push_back(
+        reflectance::Light::Directional(Vec3d(0, 0, 1), Rgb::Constant(0.2)));
   } else {
     clay.kd = Rgb(0.78, 0.70, 0.62);
+    clay.ka = clay.kd;
+    scene.lighting.ambient = Rgb::Constant(0.2);
   }
-  clay.ka = clay.kd;
   clay.ks = Rgb::Constant(0.12);
   clay.shininess = 24;
   scene.objects.push_back(std::move(object));

@@ -279,5 +279,31 @@ TEST(Preview, LeavesOutSilhouetteWallsOnly) {
   EXPECT_NE(picture(mesh, 90), picture(floor, 90));  // 90° keeps the wall
 }
 
+TEST(Preview, ShadowsKeepTheSurfacesColour) {
+  // A square of pure red albedo: outside the (white) specular highlight the picture holds no
+  // green or blue, in lit and in unlit parts alike.
+  geometry::TriangleMesh mesh;
+  mesh.positions = {{0, 0, 0}, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}};
+  mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+  mesh.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  geometry::ComputeFlatNormals(mesh);
+  ImageF red(4, 4, 3, 0.0f);
+  for (std::size_t p = 0; p < red.pixel_count(); ++p) red.pixels[3 * p] = 0.5f;
+  PreviewOptions options;
+  options.width = 64;
+  options.texture = &red;
+  const ImageF picture = RenderPreview(mesh, options);
+  std::vector<double> green_over_red;
+  for (std::size_t p = 0; p < picture.pixel_count(); ++p) {
+    const float* v = picture.pixels.data() + 3 * p;
+    if (v[0] == v[1] && v[1] == v[2]) continue;  // the grey background
+    green_over_red.push_back(v[1] / v[0]);
+  }
+  ASSERT_GT(green_over_red.size(), 100u);
+  std::nth_element(green_over_red.begin(), green_over_red.begin() + green_over_red.size() / 2,
+                   green_over_red.end());
+  EXPECT_LT(green_over_red[green_over_red.size() / 2], 0.02);
+}
+
 }  // namespace
 }  // namespace iphong::render
