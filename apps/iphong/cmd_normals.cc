@@ -97,8 +97,17 @@ void RunNormals(const NormalsCommandOptions& o) {
     load.threads = o.common.threads;
     load.memory = o.common.memory();
     io::CaptureBands capture(o.dataset, load);
-    const NormalsMemory memory =
+    NormalsMemory memory =
         EstimateNormalsMemory(capture, NormalOptionsFor(o, capture.dataset()), o.common.threads);
+    // The effective light distance's whole-field part (the surface, two passes' results), in
+    // memory as in bands.
+    const bool sought = o.light_distance != "inf" && capture.dataset().filenames.size() >= 3 &&
+                        !capture.dataset().files.near.present();
+    if (sought) {
+      memory.field_bytes = static_cast<double>(capture.dataset().mask.count()) *
+                           near::kEffectiveDistanceBytesPerPixel;
+      memory.whole_bytes += memory.field_bytes;
+    }
     const double limit = static_cast<double>(load.memory.resolved());
     if ((memory.whole_bytes > limit || o.band_rows > 0) && capture.dataset().files.near.present()) {
       throw ResourceError(o.dataset +
@@ -108,16 +117,27 @@ void RunNormals(const NormalsCommandOptions& o) {
                           FormatBytes(limit) + (o.band_rows > 0 ? " (--band-rows)" : ""));
     }
     if (memory.whole_bytes > limit || o.band_rows > 0) {
+      // In bands the whole-field part sits beside the bands, when it leaves room for a row.
+      NormalsMemory banded = memory;
+      bool field = sought;
+      if (field) {
+        banded.fixed_bytes += banded.field_bytes;
+        if (banded.BandRows(limit, capture.height()) < 1 &&
+            memory.BandRows(limit, capture.height()) >= 1) {
+          field = false;
+          banded.fixed_bytes = memory.fixed_bytes;
+        }
+      }
       const int rows = o.band_rows > 0 ? std::min(o.band_rows, capture.height())
-                                       : memory.BandRows(limit, capture.height());
+                                       : banded.BandRows(limit, capture.height());
       if (rows < 1) {
         throw ResourceError(o.dataset + ": one row of " + SizeText(capture.width(), 1) + " x " +
                             std::to_string(capture.dataset().filenames.size()) + " images needs " +
-                            FormatBytes(memory.fixed_bytes + memory.per_row_bytes) +
+                            FormatBytes(banded.fixed_bytes + banded.per_row_bytes) +
                             ", more than the memory limit of " + FormatBytes(limit) +
                             " (raise it with --memory-limit)");
       }
-      RunNormalsInBands(o, out, capture, rows, memory, SecondsSince(total_start));
+      RunNormalsInBands(o, out, capture, rows, banded, field, SecondsSince(total_start));
       return;
     }
   }

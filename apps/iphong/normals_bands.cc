@@ -14,6 +14,7 @@
 #include "io/visualize.h"
 #include "iphong/console.h"
 #include "iphong/normals_command.h"
+#include "near/effective_distance.h"
 #include "render/preview.h"
 #include "solve/bands.h"
 #include "solve/few_images.h"
@@ -69,7 +70,7 @@ NormalsMemory EstimateNormalsMemory(const io::CaptureBands& capture,
 
 void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
                        io::CaptureBands& capture, int band_rows, const NormalsMemory& memory,
-                       double started_seconds_ago) {
+                       bool field, double started_seconds_ago) {
   const auto start = Clock::now();
   const io::Dataset& dataset = capture.dataset();
   const int k = static_cast<int>(dataset.filenames.size());
@@ -174,8 +175,30 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
     }
   };
   solve::NormalResult result;
+  nlohmann::json effective_json;
+  if (o.light_distance != "inf" && !field) {
+    Warn(o.dataset +
+         ": solved with distant lights: the effective light distance needs the whole "
+         "normal map beside the bands (" +
+         FormatBytes(memory.field_bytes) +
+         "), more than the memory limit leaves; the in-memory run may choose a finite distance "
+         "and differ (raise --memory-limit, or --light-distance inf to say so)");
+  }
   try {
-    result = solve::EstimateNormalsInBands(source, band_rows, options, write, band_progress);
+    if (field) {
+      // The distant solve, the choice of D and the near passes, each pass over the bands; only
+      // the per-pixel results are whole. Written when the last pass is done.
+      near::EffectiveDistanceOptions e = EffectiveDistanceOptionsFor(o, options);
+      const near::EffectiveDistanceResult r =
+          near::SolveEffectiveDistanceInBands(source, band_rows, e, band_progress);
+      effective_json = EffectiveDistanceJson(r);
+      for (int y0 = 0; y0 < height; y0 += band_rows) {
+        write(y0, solve::ResultRows(r.normals, y0, std::min(height, y0 + band_rows)));
+      }
+      result = solve::ResultFields(r.normals);
+    } else {
+      result = solve::EstimateNormalsInBands(source, band_rows, options, write, band_progress);
+    }
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(o.dataset + ": " + e.what());
   }
@@ -224,12 +247,17 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
   metrics["images"] = k;
   metrics["model"] = reflectance::LobeName(result.model);
   if (frame) metrics["frame_check"] = FrameCheckJson(*frame);
+  if (!effective_json.is_null()) metrics["effective_distance"] = effective_json;
   metrics["bands"] = {
       {"rows", band_rows},
       {"count", (height + band_rows - 1) / band_rows},
       {"memory_limit_bytes", o.common.memory().resolved()},
       {"estimated_whole_bytes", memory.whole_bytes},
-      {"estimated_band_bytes", memory.fixed_bytes + band_rows * memory.per_row_bytes}};
+      {"estimated_band_bytes", memory.fixed_bytes + band_rows * memory.per_row_bytes},
+      {"estimated_row_bytes", memory.per_row_bytes},
+      // The effective light distance's whole-field part (in the band figure when sought).
+      {"effective_distance_bytes", memory.field_bytes},
+      {"effective_distance_sought", field}};
   metrics["sample_seconds"] = result.summary.init_seconds;
   metrics["model_seconds"] = result.summary.model_seconds;
   metrics["solve_seconds"] = result.summary.solve_seconds;

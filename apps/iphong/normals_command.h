@@ -45,6 +45,9 @@ struct NormalsMemory {
   double whole_bytes = 0;
   double fixed_bytes = 0;    // in bands: the mask, the plan sample, the libraries
   double per_row_bytes = 0;  // in bands: per row of the working size
+  // In bands, beside fixed_bytes when the effective light distance is sought: the whole-field
+  // part (near::kEffectiveDistanceBytesPerPixel per masked pixel).
+  double field_bytes = 0;
   // The rows a band may have within `limit` bytes; 0 when not even one fits.
   int BandRows(double limit, int height) const;
 };
@@ -74,9 +77,12 @@ solve::NormalOptions NormalOptionsFor(const NormalsCommandOptions& o, const io::
 // Normals in bands of `band_rows` rows (solve/bands.h), each band's results written as it is
 // done: normals.exr/.png, albedo.exr, residual.exr, specular.exr, model.exr; then albedo.png from
 // the written albedo.exr, material.json and metrics.json. Commits `out`.
+// `field`: the effective light distance is sought (near::SolveEffectiveDistanceInBands, the
+// in-memory run's result); false when --light-distance inf, or when its whole-field part would
+// not fit (distant lights, with a warning).
 void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
                        io::CaptureBands& capture, int band_rows, const NormalsMemory& memory,
-                       double started_seconds_ago);
+                       bool field, double started_seconds_ago);
 
 // A near-light capture's solve (normals_near.cc): the loop of near/near.h on the capture's point
 // lights, with the camera as the working images see it.
@@ -94,6 +100,12 @@ near::EffectiveDistanceResult SolveWithEffectiveDistance(const NormalsCommandOpt
                                                          const solve::PhotometricData& data,
                                                          const solve::NormalOptions& options,
                                                          nlohmann::json& metrics);
+// The options of both runs (whole and in bands) from --light-distance; throws
+// std::invalid_argument on a bad value.
+near::EffectiveDistanceOptions EffectiveDistanceOptionsFor(const NormalsCommandOptions& o,
+                                                           const solve::NormalOptions& options);
+// metrics.json's "effective_distance".
+nlohmann::json EffectiveDistanceJson(const near::EffectiveDistanceResult& r);
 
 // depth.exr (mm along the axis, 0 outside), the surface files (mesh.ply in mm, height.png) and
 // metrics.json's "near_lights" (passes, distance, depth RMSE against Depth_gt.mat).

@@ -139,10 +139,8 @@ NearRun SolveNearCapture(const NormalsCommandOptions& o, const io::Dataset& d,
   return run;
 }
 
-near::EffectiveDistanceResult SolveWithEffectiveDistance(const NormalsCommandOptions& o,
-                                                         const solve::PhotometricData& data,
-                                                         const solve::NormalOptions& options,
-                                                         nlohmann::json& metrics) {
+near::EffectiveDistanceOptions EffectiveDistanceOptionsFor(const NormalsCommandOptions& o,
+                                                           const solve::NormalOptions& options) {
   near::EffectiveDistanceOptions e;
   e.normals = options;
   if (o.light_distance == "inf") {
@@ -158,13 +156,10 @@ near::EffectiveDistanceResult SolveWithEffectiveDistance(const NormalsCommandOpt
     }
   }
   e.log = [&o](const std::string& line) { Say(o.common, "  %s\n", line.c_str()); };
-  near::EffectiveDistanceResult r;
-  try {
-    r = near::SolveEffectiveDistance(data, e);
-  } catch (const std::invalid_argument& err) {
-    throw std::runtime_error(o.dataset + ": " + err.what());
-  }
-  if (o.light_distance == "inf") return r;
+  return e;
+}
+
+nlohmann::json EffectiveDistanceJson(const near::EffectiveDistanceResult& r) {
   nlohmann::json candidates = nlohmann::json::array();
   for (const near::DistanceCandidate& c : r.scored) {
     candidates.push_back(
@@ -178,25 +173,39 @@ near::EffectiveDistanceResult SolveWithEffectiveDistance(const NormalsCommandOpt
   for (const near::NearPass& p : r.passes) {
     passes.push_back({{"normals_moved_deg", p.change_deg}, {"seconds", p.seconds}});
   }
-  metrics["effective_distance"] = {
-      {"distance_px",
-       std::isinf(r.distance_px) ? nlohmann::json("inf") : nlohmann::json(r.distance_px)},
-      {"chosen", r.chosen},
-      {"object_size_px", r.object_size_px},
-      {"test", r.criterion},
-      {"heldout_gain", r.gain},
-      {"heldout_gain_error", r.gain_error},
-      // Where the diffuse test proposed a D: the object's model's loss there (refused beyond its
-      // standard error); null when not asked.
-      {"model_loss_at_diffuse_distance",
-       std::isnan(r.model_loss) ? nlohmann::json() : nlohmann::json(r.model_loss)},
-      {"model_loss_error",
-       std::isnan(r.model_loss_error) ? nlohmann::json() : nlohmann::json(r.model_loss_error)},
-      {"candidates", candidates},
-      {"passes", passes},
-      {"distant_seconds", r.distant_seconds},
-      {"choice_seconds", r.choice_seconds},
-      {"seconds", r.seconds}};
+  return {{"distance_px",
+           std::isinf(r.distance_px) ? nlohmann::json("inf") : nlohmann::json(r.distance_px)},
+          {"chosen", r.chosen},
+          {"object_size_px", r.object_size_px},
+          {"test", r.criterion},
+          {"heldout_gain", r.gain},
+          {"heldout_gain_error", r.gain_error},
+          // Where the diffuse test proposed a D: the object's model's loss there (refused beyond
+          // its standard error); null when not asked.
+          {"model_loss_at_diffuse_distance",
+           std::isnan(r.model_loss) ? nlohmann::json() : nlohmann::json(r.model_loss)},
+          {"model_loss_error",
+           std::isnan(r.model_loss_error) ? nlohmann::json() : nlohmann::json(r.model_loss_error)},
+          {"candidates", candidates},
+          {"passes", passes},
+          {"distant_seconds", r.distant_seconds},
+          {"choice_seconds", r.choice_seconds},
+          {"seconds", r.seconds}};
+}
+
+near::EffectiveDistanceResult SolveWithEffectiveDistance(const NormalsCommandOptions& o,
+                                                         const solve::PhotometricData& data,
+                                                         const solve::NormalOptions& options,
+                                                         nlohmann::json& metrics) {
+  const near::EffectiveDistanceOptions e = EffectiveDistanceOptionsFor(o, options);
+  near::EffectiveDistanceResult r;
+  try {
+    r = near::SolveEffectiveDistance(data, e);
+  } catch (const std::invalid_argument& err) {
+    throw std::runtime_error(o.dataset + ": " + err.what());
+  }
+  if (o.light_distance == "inf") return r;
+  metrics["effective_distance"] = EffectiveDistanceJson(r);
   return r;
 }
 

@@ -45,8 +45,8 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     (3,) array: the median ks of the plan sample's solved pixels that kept the lobe, as
     estimate_normals reports it.
     Lights are distant: the same as iphong.estimate_normals with light_distance='inf' (an
-    effective light distance is not searched here; the in-memory run searches one by default and
-    may take it). Integer images (uint8, uint16) need encoding='linear' or 'srgb', as in
+    effective light distance is not searched here; the in-memory run and the command line's
+    bands search one by default and may take it: DiLiGenT's cat, ball and harvest do). Integer images (uint8, uint16) need encoding='linear' or 'srgb', as in
     iphong.estimate_normals (scaled to [0, 1], the sRGB curve undone; each block lazily); float
     images with encoding='srgb' are linearized.
     Raises ValueError for inconsistent shapes or chunks over K or the colour axis.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <stdexcept>
 
 #include "core/golden_section.h"
@@ -43,6 +44,31 @@ PhotometricData NearData(const PhotometricData& data, const geometry::HeightMapF
   return near;
 }
 
+// data without its observations.
+PhotometricData LayoutOf(const PhotometricData& data) {
+  PhotometricData out;
+  out.width = data.width;
+  out.height = data.height;
+  out.images = data.images;
+  out.pixels = data.pixels;
+  out.light_directions = data.light_directions;
+  out.light_intensities = data.light_intensities;
+  out.point_lights = data.point_lights;
+  out.points_cam = data.points_cam;
+  out.perspective = data.perspective;
+  return out;
+}
+
+// `data`'s lights made `from`'s (point lights, the reference directions and intensities), and
+// its points, when it holds every pixel `from` holds.
+void WithLightsOf(PhotometricData& data, const PhotometricData& from) {
+  data.perspective = from.perspective;
+  data.point_lights = from.point_lights;
+  data.light_directions = from.light_directions;
+  data.light_intensities = from.light_intensities;
+  if (data.pixel_count() == from.pixel_count()) data.points_cam = from.points_cam;
+}
+
 // The held-out model of a plan: the chosen one, or what it was given (Lambert, known
 // coefficients).
 solve::ModelCandidate PlanModel(const solve::NormalPlan& plan) {
@@ -77,10 +103,6 @@ EffectiveDistanceResult SolveEffectiveDistance(const PhotometricData& data,
   if (data.images < 3 || data.pixel_count() == 0) {
     throw std::invalid_argument("an effective distance needs 3 images and a pixel");
   }
-  const auto say = [&](const std::string& line) {
-    if (o.log) o.log(line);
-  };
-  EffectiveDistanceResult result;
   const std::size_t pixels = data.pixel_count();
 
   // The distant solve: its plan, its normals.
@@ -90,13 +112,51 @@ EffectiveDistanceResult SolveEffectiveDistance(const PhotometricData& data,
       plan_sample.size() == pixels
           ? solve::PlanNormals(data, o.normals)
           : solve::PlanNormals(solve::SubsetObservations(data, plan_sample), o.normals);
-  result.distant = solve::SolveNormalsWithPlan(data, plan);
+  solve::NormalResult distant = solve::SolveNormalsWithPlan(data, plan);
   {
     std::vector<Vec3f> sample_ks;
-    solve::AppendSampleSpecular(result.distant, data, plan_sample, sample_ks);
-    solve::FinishNormals(result.distant, plan, sample_ks);
+    solve::AppendSampleSpecular(distant, data, plan_sample, sample_ks);
+    solve::FinishNormals(distant, plan, sample_ks);
   }
-  result.distant_seconds = SecondsSince(start);
+  const double distant_seconds = SecondsSince(start);
+
+  // The capture is in memory: its observations are subsets of data, and each near pass refits
+  // one copy of it under the pass's lights and points.
+  DistanceCapture capture;
+  capture.layout = &data;
+  capture.observations = [&](const std::vector<std::vector<std::size_t>>& sets) {
+    std::vector<PhotometricData> out;
+    for (const auto& indices : sets) out.push_back(solve::SubsetObservations(data, indices));
+    return out;
+  };
+  std::optional<PhotometricData> near;
+  capture.refine = [&](const PhotometricData& near_layout, const solve::NormalPlan& near_plan,
+                       const solve::NormalResult& previous) {
+    if (!near) near = data;
+    WithLightsOf(*near, near_layout);
+    return solve::RefineNormalsWithPlan(*near, near_plan, previous);
+  };
+  EffectiveDistanceResult result = ContinueEffectiveDistance(capture, plan, std::move(distant), o);
+  result.distant_seconds = distant_seconds;
+  result.seconds = SecondsSince(start);
+  return result;
+}
+
+EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture,
+                                                  const solve::NormalPlan& plan,
+                                                  solve::NormalResult distant,
+                                                  const EffectiveDistanceOptions& o) {
+  const auto start = Clock::now();
+  if (auto m = o.Validate(); !m.empty()) throw std::invalid_argument(m);
+  const PhotometricData& data = *capture.layout;
+  const auto say = [&](const std::string& line) {
+    if (o.log) o.log(line);
+  };
+  EffectiveDistanceResult result;
+  const std::size_t pixels = data.pixel_count();
+  const std::vector<std::size_t> plan_sample =
+      solve::PlanSampleIndices(pixels, o.normals.plan_sample);
+  result.distant = std::move(distant);
   result.normals = result.distant;
   if (std::isinf(o.distance_px)) {
     result.seconds = SecondsSince(start);
@@ -135,7 +195,7 @@ EffectiveDistanceResult SolveEffectiveDistance(const PhotometricData& data,
         plan.model_choice.fold.empty() ? solve::LightFolds(data.images) : plan.model_choice.fold;
     // The model choice's pixels alone: each candidate's lights are set on them only.
     const std::vector<std::size_t> spread = solve::SpreadIndices(pixels, o.normals.model_sample);
-    const PhotometricData sub = solve::SubsetObservations(data, spread);
+    const PhotometricData sub = std::move(capture.observations({spread})[0]);
     std::vector<double> sub_depth;
     std::vector<Vec3d> starts;
     const std::vector<Vec3d> all = NormalsPerPixel(result.distant, data);
@@ -262,8 +322,9 @@ EffectiveDistanceResult SolveEffectiveDistance(const PhotometricData& data,
   }
 
   // The near passes: the model chosen again with these lights (warm), then every pixel refined
-  // from its last normal, the surface integrated, until the normals settle.
-  PhotometricData near = NearData(data, frame, depth, centre, distance);
+  // from its last normal, the surface integrated, until the normals settle. `near` holds the
+  // lights and points; the observations stay with the capture.
+  PhotometricData near = NearData(LayoutOf(data), frame, depth, centre, distance);
   std::vector<Vec3d> starts;
   {
     const std::vector<Vec3d> all = NormalsPerPixel(result.distant, data);
@@ -275,12 +336,14 @@ EffectiveDistanceResult SolveEffectiveDistance(const PhotometricData& data,
   // (a Lambertian sphere under a dome, directions only: 7.68° with the distant choice's Phong
   // lobe kept, 3.80° chosen again, its Lambert run 4.26°; DiLiGenT's ball 1.13° -> 1.12°).
   const auto replan_start = Clock::now();
-  const solve::NormalPlan near_plan =
-      solve::NeedsPlanSample(o.normals)
-          ? solve::PlanNormals(
-                plan_sample.size() == pixels ? near : solve::SubsetObservations(near, plan_sample),
-                o.normals, &starts)
-          : plan;
+  solve::NormalPlan near_plan = plan;
+  if (solve::NeedsPlanSample(o.normals)) {
+    PhotometricData sample = std::move(capture.observations({plan_sample})[0]);
+    sample.points_cam.clear();
+    for (std::size_t i : plan_sample) sample.points_cam.push_back(near.points_cam[i]);
+    WithLightsOf(sample, near);
+    near_plan = solve::PlanNormals(sample, o.normals, &starts);
+  }
   {
     char line[200];
     std::snprintf(line, sizeof line, "model chosen again with these lights: %s %.3g, %.2f s",
@@ -291,7 +354,7 @@ EffectiveDistanceResult SolveEffectiveDistance(const PhotometricData& data,
   solve::NormalResult last = result.distant;
   for (int pass = 0; pass < o.max_passes; ++pass) {
     const auto pass_start = Clock::now();
-    solve::NormalResult now = solve::RefineNormalsWithPlan(near, near_plan, last);
+    solve::NormalResult now = capture.refine(near, near_plan, last);
     NearPass record;
     record.kind = "refine";
     record.change_deg = MeanChangeDeg(last, now, near);

@@ -18,11 +18,13 @@
 // pixel from its distant normal, integrating and refining until the normals settle.
 #pragma once
 
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "near/near.h"
+#include "solve/bands.h"
 
 namespace iphong::near {
 
@@ -72,5 +74,38 @@ struct EffectiveDistanceResult {
 // their positions are known (near.h).
 EffectiveDistanceResult SolveEffectiveDistance(const solve::PhotometricData& data,
                                                const EffectiveDistanceOptions& options);
+
+// The same on a capture read in bands of rows (solve/bands.h), for captures whose observations do
+// not fit in memory: the distant solve in bands, then the choice and every near pass as above,
+// each pass reading the bands again; only per-pixel results (the normal maps, the surface) are
+// whole. Every step is per pixel or on the same samples, so the result is the in-memory one bit
+// for bit, whatever the band height.
+EffectiveDistanceResult SolveEffectiveDistanceInBands(const solve::BandSource& source,
+                                                      int band_rows,
+                                                      const EffectiveDistanceOptions& options,
+                                                      const solve::BandProgress& progress = {});
+// Memory the whole-field part needs per masked pixel (the results of two passes, the surface,
+// its points and the integration), beside the bands themselves.
+constexpr double kEffectiveDistanceBytesPerPixel = 2 * 11 * 4 + 8 + 24 + 4 + 120;
+
+// What the choice of D and the near passes read of a capture, held whole or in bands.
+struct DistanceCapture {
+  // Size, masked pixels (row-major) and lights; its observations are not read.
+  const solve::PhotometricData* layout = nullptr;
+  // The observations of the pixels at each list of positions (ascending, in masked order).
+  std::function<std::vector<solve::PhotometricData>(const std::vector<std::vector<std::size_t>>&)>
+      observations;
+  // Every pixel refitted from `previous` (solve::RefineNormalsWithPlan) under near_layout's point
+  // lights and surface points (its observations empty).
+  std::function<solve::NormalResult(const solve::PhotometricData& near_layout,
+                                    const solve::NormalPlan& plan,
+                                    const solve::NormalResult& previous)>
+      refine;
+};
+// The part after the distant solve (`distant`, finished with `plan`): the surface, D, the passes.
+EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture,
+                                                  const solve::NormalPlan& plan,
+                                                  solve::NormalResult distant,
+                                                  const EffectiveDistanceOptions& options);
 
 }  // namespace iphong::near

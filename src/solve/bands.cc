@@ -1,6 +1,7 @@
 #include "solve/bands.h"
 
 #include <algorithm>
+#include <array>
 #include <stdexcept>
 
 #include "core/timing.h"
@@ -18,12 +19,63 @@ std::vector<std::size_t> SampleInBand(std::vector<std::size_t>::const_iterator& 
   return local;
 }
 
+// The per-pixel images of a result, in one list for cutting and pasting rows.
+template <typename Result>
+auto PixelImages(Result& r) {
+  return std::array{&r.normals, &r.albedo, &r.specular, &r.residual, &r.model_map};
+}
+
 }  // namespace
+
+NormalResult ResultFields(const NormalResult& whole) {
+  NormalResult r;
+  r.model = whole.model;
+  r.ks = whole.ks;
+  r.shininess = whole.shininess;
+  r.ambient_term = whole.ambient_term;
+  r.code_offset = whole.code_offset;
+  r.material_estimated = whole.material_estimated;
+  r.specular_identifiable = whole.specular_identifiable;
+  r.specular_note = whole.specular_note;
+  r.model_choice = whole.model_choice;
+  r.summary = whole.summary;
+  return r;
+}
+
+NormalResult ResultRows(const NormalResult& whole, int y0, int y1) {
+  NormalResult band = ResultFields(whole);
+  const auto from = PixelImages(whole);
+  const auto to = PixelImages(band);
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    const ImageF& image = *from[i];
+    if (image.pixels.empty()) continue;
+    ImageF rows(image.width, y1 - y0, image.channels);
+    const std::size_t row = std::size_t(image.width) * image.channels;
+    std::copy(image.pixels.begin() + std::ptrdiff_t(y0 * row),
+              image.pixels.begin() + std::ptrdiff_t(y1 * row), rows.pixels.begin());
+    *to[i] = std::move(rows);
+  }
+  return band;
+}
+
+void PasteResultRows(NormalResult& whole, const NormalResult& band, int y0, int width, int height) {
+  const auto from = PixelImages(band);
+  const auto to = PixelImages(whole);
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    const ImageF& rows = *from[i];
+    if (rows.pixels.empty()) continue;
+    ImageF& image = *to[i];
+    if (image.pixels.empty()) image = ImageF(width, height, rows.channels, 0.0f);
+    const std::size_t row = std::size_t(width) * rows.channels;
+    std::copy(rows.pixels.begin(), rows.pixels.end(),
+              image.pixels.begin() + std::ptrdiff_t(y0 * row));
+  }
+}
 
 NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
                                     const NormalOptions& options,
                                     const std::function<void(int, const NormalResult&)>& write,
-                                    const BandProgress& progress) {
+                                    const BandProgress& progress, NormalPlan* plan_out) {
   if (auto m = options.Validate(); !m.empty()) throw std::invalid_argument(m);
   if (band_rows < 1 || source.width < 1 || source.height < 1 || !source.read) {
     throw std::invalid_argument("bands need a size, a reader and at least one row each");
@@ -100,6 +152,7 @@ NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
   }
   if (!planned) check_count();
   FinishNormals(total, plan, sample_ks);
+  if (plan_out) *plan_out = plan;
   NormalSummary& s = total.summary;
   s.success = true;
   s.message = "solved " + std::to_string(s.pixels - s.dark_pixels - s.underdetermined_pixels) +

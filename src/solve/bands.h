@@ -32,9 +32,18 @@ struct BandProgress {
 // Calls `write(y0, band)` for each band in order, band the results of rows [y0, y0 + rows) as
 // SolveNormalsWithPlan gives them. Returns the whole-object result without images: the model,
 // ks (FinishNormals), the summed summary. Throws std::invalid_argument as EstimateNormals.
+// `plan`, when given, receives the plan every band was fitted with.
 NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
                                     const NormalOptions& options,
                                     const std::function<void(int y0, const NormalResult&)>& write,
-                                    const BandProgress& progress = {});
+                                    const BandProgress& progress = {}, NormalPlan* plan = nullptr);
+
+// A result's whole-object fields alone (no images).
+NormalResult ResultFields(const NormalResult& result);
+// A result's per-pixel images (normals, albedo, specular, residual, model map) for rows
+// [y0, y1), and the same pasted back into a whole result at row y0 (its images sized on the first
+// paste); the whole-object fields are the source's.
+NormalResult ResultRows(const NormalResult& whole, int y0, int y1);
+void PasteResultRows(NormalResult& whole, const NormalResult& band, int y0, int width, int height);
 
 }  // namespace iphong::solve

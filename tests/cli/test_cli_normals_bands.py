@@ -3,6 +3,7 @@
 for one row, a file that fails to decode half way and options that need the whole capture are
 one line each, and nothing is written."""
 import json
+import os
 import pathlib
 import shutil
 import subprocess
@@ -13,6 +14,9 @@ from cli import IPHONG, assert_refused, binary_available, render_dataset, run
 
 pytestmark = pytest.mark.skipif(not binary_available(), reason=f"no iphong binary at {IPHONG}")
 OIIOTOOL = shutil.which("oiiotool")
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+DATA = pathlib.Path(os.environ.get("IPHONG_DATA_DIR", ROOT.parent / "shared" / "data"))
+CAT = DATA / "diligent-crop8" / "cat"
 
 
 def identical(a, b):
@@ -108,3 +112,35 @@ def test_one_image_is_refused_when_its_global_solve_would_not_fit(captures, tmp_
                    r"x 1 images would need 2[23]\d MB whole\): one or two images are solved whole")
     code, _, err = run("normals", ds, "-o", tmp_path / "out", "-q", "--memory-limit", "0.25")
     assert code == 0, err
+
+
+@pytest.mark.skipif(OIIOTOOL is None, reason="oiiotool (openimageio-tools) not installed")
+@pytest.mark.skipif(not CAT.is_dir(), reason=f"DiLiGenT cat crop not found at {CAT}")
+def test_bands_choose_the_same_light_distance(tmp_path):
+    """DiLiGenT's LEDs are about a metre from the cat: in memory a finite effective distance is
+    chosen and the near passes run; in bands the same, each pass over the bands, with the same
+    maps bit for bit (they were the distant solve's before, up to 0.3 degrees apart)."""
+    code, out, err = run("normals", CAT, "-o", tmp_path / "whole", "--json", "-q")
+    assert code == 0, err
+    whole = json.loads(out)
+    assert whole["effective_distance"]["distance_px"] != "inf"
+    code, out, err = run("normals", CAT, "-o", tmp_path / "bands", "--band-rows", "9", "--json")
+    assert code == 0, err
+    bands = json.loads(out)
+    assert bands["bands"]["effective_distance_sought"]
+    assert bands["effective_distance"]["distance_px"] == whole["effective_distance"]["distance_px"]
+    assert len(bands["effective_distance"]["passes"]) == len(whole["effective_distance"]["passes"])
+    for name in ["normals.exr", "albedo.exr", "residual.exr", "specular.exr", "model.exr"]:
+        assert identical(tmp_path / "whole" / name, tmp_path / "bands" / name), name
+
+    # A limit that leaves a row but not the whole normal map beside it: distant lights, said.
+    b = bands["bands"]
+    one_row = b["estimated_band_bytes"] - (b["rows"] - 1) * b["estimated_row_bytes"]
+    limit = one_row - b["effective_distance_bytes"] / 2
+    code, out, err = run("normals", CAT, "-o", tmp_path / "tight", "--json",
+                         "--memory-limit", f"{limit / 1e9:.9f}")
+    assert code == 0, err
+    tight = json.loads(out)
+    assert not tight["bands"]["effective_distance_sought"]
+    assert "effective_distance" not in tight
+    assert "solved with distant lights" in err and "--memory-limit" in err
