@@ -116,10 +116,14 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
   auto progress = std::make_shared<Progress>("sample", o.common.progress_mode(), "rows", height);
   std::shared_ptr<Progress> fit;
   solve::BandProgress band_progress;
+  int fit_pass = 0;
   band_progress.rows = [&](int pass, int rows) {
-    if (pass == 2 && !fit) {
+    if (pass >= 2 && pass != fit_pass) {  // the fit, then each near pass: a bar each
       progress.reset();
-      fit = std::make_shared<Progress>("fit", o.common.progress_mode(), "rows", height);
+      fit.reset();
+      fit_pass = pass;
+      fit = std::make_shared<Progress>(pass == 2 ? "fit" : "near pass " + std::to_string(pass - 2),
+                                       o.common.progress_mode(), "rows", height);
     }
     (pass == 1 ? progress : fit)->Count(rows);
   };
@@ -196,6 +200,9 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
         write(y0, solve::ResultRows(r.normals, y0, std::min(height, y0 + band_rows)));
       }
       result = solve::ResultFields(r.normals);
+      // The counts and timings of the distant solve in bands, and the passes' time.
+      result.summary = r.distant.summary;
+      for (const near::NearPass& pass : r.passes) result.summary.solve_seconds += pass.seconds;
     } else {
       result = solve::EstimateNormalsInBands(source, band_rows, options, write, band_progress);
     }

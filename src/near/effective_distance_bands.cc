@@ -80,8 +80,10 @@ EffectiveDistanceResult SolveEffectiveDistanceInBands(const solve::BandSource& s
     return out;
   };
   // A pass over the bands refits each under the pass's lights, from the previous result's rows.
+  int near_pass = 0;
   capture.refine = [&](const solve::PhotometricData& near_layout,
                        const solve::NormalPlan& near_plan, const solve::NormalResult& previous) {
+    ++near_pass;
     solve::NormalResult now;
     std::size_t position = 0;
     for (int y0 = 0; y0 < height; y0 += band_rows) {
@@ -102,8 +104,12 @@ EffectiveDistanceResult SolveEffectiveDistanceInBands(const solve::BandSource& s
       if (y0 > 0) {
         s.solve_seconds += r.summary.solve_seconds;
         s.iterations += r.summary.iterations;
+        s.pixels += r.summary.pixels;
+        s.dark_pixels += r.summary.dark_pixels;
+        s.underdetermined_pixels += r.summary.underdetermined_pixels;
       }
       solve::PasteResultRows(now, r, y0, width, height);
+      if (progress.rows) progress.rows(2 + near_pass, y1);
     }
     return now;
   };

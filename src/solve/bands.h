@@ -25,7 +25,8 @@ struct BandSource {
 };
 
 struct BandProgress {
-  // Called with the pass (1: drawing the plan sample, 2: fitting) and the rows done.
+  // Called with the pass (1: drawing the plan sample, 2: fitting; 3, 4, ...: the effective light
+  // distance's near passes, near/effective_distance.h) and the rows done.
   std::function<void(int pass, int rows_done)> rows;
 };
 
