@@ -1,5 +1,6 @@
 // Python view of src/near: estimate_normals' near-light keywords, and the effective distance of
 // captures with directions only.
+#include <pybind11/functional.h>
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
@@ -79,6 +80,31 @@ NearInputs NearInputsFrom(const py::object& positions_in, const py::object& came
 }
 
 // light_distance: "auto" (0), "inf" or a number of pixels.
+// The effective distance's result as estimate_normals reports it.
+py::dict DistanceDict(const near::EffectiveDistanceResult& r) {
+  py::list candidates;
+  for (const near::DistanceCandidate& c : r.scored) {
+    candidates.append(py::dict(
+        py::arg("distance_px") = c.distance_px, py::arg("test") = c.criterion,
+        py::arg("heldout_cost") = c.heldout_cost, py::arg("heldout_error") = c.heldout_error));
+  }
+  py::list passes;
+  for (const near::NearPass& p : r.passes) {
+    passes.append(
+        py::dict(py::arg("normals_moved_deg") = p.change_deg, py::arg("seconds") = p.seconds));
+  }
+  return py::dict(py::arg("distance_px") = r.distance_px, py::arg("chosen") = r.chosen,
+                  py::arg("object_size_px") = r.object_size_px, py::arg("test") = r.criterion,
+                  py::arg("heldout_gain") = r.gain, py::arg("heldout_gain_error") = r.gain_error,
+                  py::arg("model_loss_at_diffuse_distance") =
+                      std::isnan(r.model_loss) ? py::object(py::none()) : py::float_(r.model_loss),
+                  py::arg("model_loss_error") = std::isnan(r.model_loss_error)
+                                                    ? py::object(py::none())
+                                                    : py::float_(r.model_loss_error),
+                  py::arg("candidates") = candidates, py::arg("passes") = passes,
+                  py::arg("seconds") = r.seconds);
+}
+
 double EffectiveDistanceFrom(const py::object& value) {
   if (py::isinstance<py::str>(value)) {
     const std::string text = value.cast<std::string>();
@@ -147,27 +173,196 @@ bool SolveNear(const solve::PhotometricData& data, const solve::NormalOptions& o
         r = near::SolveEffectiveDistance(data, e);
       }
       result = r.normals;
-      py::list candidates;
-      for (const near::DistanceCandidate& c : r.scored) {
-        candidates.append(py::dict(
-            py::arg("distance_px") = c.distance_px, py::arg("test") = c.criterion,
-            py::arg("heldout_cost") = c.heldout_cost, py::arg("heldout_error") = c.heldout_error));
-      }
-      out["effective_distance"] =
-          py::dict(py::arg("distance_px") = r.distance_px, py::arg("chosen") = r.chosen,
-                   py::arg("object_size_px") = r.object_size_px, py::arg("test") = r.criterion,
-                   py::arg("heldout_gain") = r.gain, py::arg("heldout_gain_error") = r.gain_error,
-                   py::arg("model_loss_at_diffuse_distance") =
-                       std::isnan(r.model_loss) ? py::object(py::none()) : py::float_(r.model_loss),
-                   py::arg("model_loss_error") = std::isnan(r.model_loss_error)
-                                                     ? py::object(py::none())
-                                                     : py::float_(r.model_loss_error),
-                   py::arg("candidates") = candidates, py::arg("seconds") = r.seconds);
+      out["effective_distance"] = DistanceDict(r);
     } else {
       return false;
     }
   }
   return true;
+}
+
+namespace {
+
+// A near pass's lights as plain arrays (float64: the same bits on a Dask worker): each point
+// light's position and power (Light::Point with the inverse square), the reference directions
+// and intensities (solve::SetReferenceLights), and the surface points in masked order.
+py::dict NearLightsDict(const solve::PhotometricData& near) {
+  const std::size_t k = near.point_lights.size(), n = near.points_cam.size();
+  py::array_t<double> positions({k, std::size_t{3}}), powers({k, std::size_t{3}});
+  py::array_t<double> directions({k, std::size_t{3}}), intensities({k, std::size_t{3}});
+  py::array_t<double> points({n, std::size_t{3}});
+  for (std::size_t j = 0; j < k; ++j) {
+    const reflectance::Light& l = near.point_lights[j];
+    if (l.type != reflectance::LightType::kPoint || !l.inverse_square_falloff ||
+        l.specular_intensity != l.diffuse_intensity) {
+      throw std::logic_error("an effective distance's lights are isotropic point lights");
+    }
+    for (int c = 0; c < 3; ++c) {
+      positions.mutable_at(j, c) = l.position_cam[c];
+      powers.mutable_at(j, c) = l.diffuse_intensity[c];
+      directions.mutable_at(j, c) = near.light_directions[j][c];
+      intensities.mutable_at(j, c) = near.light_intensities[j][c];
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) points.mutable_at(i, c) = near.points_cam[i][c];
+  return py::dict(py::arg("light_positions") = positions, py::arg("light_powers") = powers,
+                  py::arg("reference_directions") = directions,
+                  py::arg("reference_intensities") = intensities, py::arg("points") = points);
+}
+
+}  // namespace
+
+void BindNear(py::module_& m) {
+  m.def(
+      "effective_distance_pieces",
+      [](const py::object& mask_in, const py::object& light_directions,
+         const py::object& light_intensities, const py::object& plan_in,
+         const py::object& distant_maps, const py::object& model, const py::object& material,
+         double discard_dark, double discard_bright, bool fast, double shadow_threshold,
+         std::size_t plan_sample, const py::object& light_distance,
+         const std::function<py::list(const std::vector<std::vector<std::size_t>>&)>& observations,
+         const std::function<py::object(const py::dict&, const py::dict&, const py::object&, bool)>&
+             refine,
+         int threads) {
+        const solve::NormalPlan plan = PlanFrom(plan_in);
+        const std::size_t k = py::len(light_directions);
+        solve::NormalResult distant =
+            ResultFromMaps(distant_maps, plan.options.model != reflectance::Lobe::kLambert, false);
+        const int w = distant.normals.width, h = distant.normals.height;
+        const Mask mask = ToMask(mask_in, w, h);
+        bool has_map = false;  // whether the blocks made a model map (a pixel chose 0 or 1)
+        {
+          const FloatStack maps = FloatStack::ensure(distant_maps);
+          for (std::size_t p = 0; p < std::size_t(w) * h && !has_map; ++p)
+            has_map = maps.data()[11 * p + 10] != -1.0f;
+        }
+        if (has_map) distant = ResultFromMaps(distant_maps, !distant.specular.pixels.empty(), true);
+        solve::PhotometricData layout;
+        layout.width = w;
+        layout.height = h;
+        layout.images = static_cast<int>(k);
+        layout.light_directions = ToDirections(light_directions, k);
+        layout.light_intensities = Intensities(light_intensities, k);
+        for (int p = 0; p < w * h; ++p)
+          if (mask.inside[p]) layout.pixels.push_back(p);
+        near::EffectiveDistanceOptions e;
+        e.normals = OptionsFrom(model, material, discard_dark, discard_bright, fast,
+                                shadow_threshold, threads);
+        e.normals.plan_sample = plan_sample;
+        e.distance_px = EffectiveDistanceFrom(light_distance);
+
+        near::DistanceCapture capture;
+        capture.layout = &layout;
+        capture.observations = [&](const std::vector<std::vector<std::size_t>>& sets) {
+          const py::list arrays = observations(sets);
+          std::vector<solve::PhotometricData> out;
+          for (std::size_t s = 0; s < sets.size(); ++s) {
+            const FloatStack obs = FloatStack::ensure(arrays[s]);
+            if (!obs || obs.ndim() != 3 || std::size_t(obs.shape(0)) != sets[s].size() ||
+                std::size_t(obs.shape(1)) != k || obs.shape(2) != 3) {
+              throw std::invalid_argument("observations: expected (n, K, 3) for each set");
+            }
+            solve::PhotometricData d;
+            d.width = w;
+            d.height = h;
+            d.images = static_cast<int>(k);
+            d.light_directions = layout.light_directions;
+            d.light_intensities = layout.light_intensities;
+            for (std::size_t i : sets[s]) d.pixels.push_back(layout.pixels[i]);
+            d.values.assign(obs.data(), obs.data() + sets[s].size() * k * 3);
+            out.push_back(std::move(d));
+          }
+          return out;
+        };
+        capture.refine = [&](const solve::PhotometricData& near_layout,
+                             const solve::NormalPlan& near_plan,
+                             const solve::NormalResult& previous) {
+          const bool map = !previous.model_map.pixels.empty();
+          const py::object maps =
+              refine(NearLightsDict(near_layout), PlanDict(near_plan), MapsArray(previous), map);
+          solve::NormalResult r =
+              ResultFromMaps(maps, near_plan.options.model != reflectance::Lobe::kLambert, map);
+          // The whole-object fields RefineNormalsWithPlan sets (AssembleNormals, the previous).
+          const solve::NormalOptions& po = near_plan.options;
+          r.model = po.model;
+          r.shininess = po.shininess;
+          r.ambient_term = po.ambient_term;
+          r.code_offset = po.code_offset;
+          r.ks = previous.ks;
+          r.model_choice = near_plan.model_choice;
+          r.material_estimated = previous.material_estimated;
+          r.specular_identifiable = previous.specular_identifiable;
+          r.specular_note = previous.specular_note;
+          return r;
+        };
+        const near::EffectiveDistanceResult r =
+            near::ContinueEffectiveDistance(capture, plan, std::move(distant), e);
+        py::dict out = DistanceDict(r);
+        if (std::isfinite(r.distance_px)) {
+          out["maps"] = MapsArray(r.normals);
+          out["model"] = reflectance::LobeName(r.normals.model);
+          out["shininess"] = r.normals.shininess;
+          out["ks"] = std::vector<double>{r.normals.ks[0], r.normals.ks[1], r.normals.ks[2]};
+          out["ambient_term"] = std::vector<double>{
+              r.normals.ambient_term[0], r.normals.ambient_term[1], r.normals.ambient_term[2]};
+          out["code_offset"] = r.normals.code_offset;
+          out["height"] = ToArray(r.height);
+        }
+        return out;
+      },
+      py::arg("mask"), py::arg("light_directions"), py::arg("light_intensities"), py::arg("plan"),
+      py::arg("distant_maps"), py::arg("model"), py::arg("material"), py::arg("discard_dark"),
+      py::arg("discard_bright"), py::arg("fast"), py::arg("shadow_threshold"),
+      py::arg("plan_sample"), py::arg("light_distance"), py::arg("observations"), py::arg("refine"),
+      py::arg("threads") = 0,
+      R"doc(The effective light distance for iphong.dask: after the distant solve in blocks (its
+maps (H, W, 11) and plan), the choice of D and the near passes as estimate_normals makes them,
+the capture's observations read through observations(list of position lists) -> list of (n, K, 3)
+and each pass's blocks refitted through refine(lights, plan, previous maps, model_map) -> maps.)doc");
+
+  m.def(
+      "refine_normals_block",
+      [](const py::object& images_in, const py::object& mask_in, const py::object& plan_in,
+         const py::dict& lights, const py::object& points_in, const py::object& previous_in,
+         bool model_map, int threads) {
+        solve::NormalPlan plan = PlanFrom(plan_in);
+        plan.options.threads = threads;
+        const FloatStack images = ToImageStack(images_in);
+        const std::size_t k = images.shape(0);
+        const auto rows = [&](const char* key) { return ToRows(lights[key], k, key); };
+        solve::PhotometricData data = ToObservations(images, rows("reference_directions"),
+                                                     rows("reference_intensities"), mask_in);
+        const std::vector<Vec3d> positions = rows("light_positions"), powers = rows("light_powers");
+        for (std::size_t j = 0; j < k; ++j)
+          data.point_lights.push_back(reflectance::Light::Point(positions[j], powers[j], true));
+        const auto points =
+            py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(points_in);
+        if (!points || points.ndim() != 3 || points.shape(0) != data.height ||
+            points.shape(1) != data.width || points.shape(2) != 3) {
+          throw std::invalid_argument("points: expected (h, w, 3) like the block");
+        }
+        for (int p : data.pixels) {
+          const double* x = points.data() + 3 * static_cast<std::size_t>(p);
+          data.points_cam.emplace_back(x[0], x[1], x[2]);
+        }
+        const bool specular = plan.options.model != reflectance::Lobe::kLambert;
+        const solve::NormalResult previous = ResultFromMaps(previous_in, specular, model_map);
+        if (previous.normals.width != data.width || previous.normals.height != data.height) {
+          throw std::invalid_argument("previous: not the block's size");
+        }
+        solve::NormalResult r;
+        {
+          py::gil_scoped_release release;
+          r = solve::RefineNormalsWithPlan(data, plan, previous);
+        }
+        return MapsArray(r);
+      },
+      py::arg("images"), py::arg("mask"), py::arg("plan"), py::arg("lights"), py::arg("points"),
+      py::arg("previous"), py::arg("model_map"), py::arg("threads") = 1,
+      R"doc(One block of a near pass of the effective distance (effective_distance_pieces' refine):
+every pixel refitted from its previous maps under the pass's point lights seen from its surface
+point. Returns (h, w, 11) as solve_normals_block.)doc");
 }
 
 }  // namespace iphong::python

@@ -17,7 +17,6 @@
 namespace py = pybind11;
 
 namespace iphong::python {
-namespace {
 
 // estimate_normals' keyword arguments as the solver's options (the same for every entry point).
 solve::NormalOptions OptionsFrom(const py::object& model, const py::object& material,
@@ -84,6 +83,8 @@ std::vector<Vec3d> Intensities(const py::object& light_intensities, std::size_t 
                                      : ToRows(light_intensities, k, "light_intensities");
 }
 
+namespace {
+
 py::list ToList(const Vec3d& v) { return py::cast(std::vector<double>{v[0], v[1], v[2]}); }
 
 py::dict CandidateDict(const solve::ModelCandidate& c) {
@@ -108,6 +109,8 @@ solve::ModelCandidate CandidateFrom(const py::dict& d) {
   c.fold_angle_deg = d["fold_angle_deg"].cast<double>();
   return c;
 }
+
+}  // namespace
 
 // A plan as plain Python values (floats are doubles, so a plan sent to a Dask worker and back is
 // the same plan bit for bit).
@@ -184,7 +187,47 @@ solve::NormalPlan PlanFrom(const py::object& value) {
   return plan;
 }
 
-}  // namespace
+py::array_t<float> MapsArray(const solve::NormalResult& r) {
+  const std::size_t h = r.normals.height, w = r.normals.width;
+  py::array_t<float> out({h, w, std::size_t{11}});
+  float* o = out.mutable_data();
+  for (std::size_t p = 0; p < h * w; ++p) {
+    float* v = o + 11 * p;
+    for (int c = 0; c < 3; ++c) {
+      v[c] = r.normals.pixels[3 * p + c];
+      v[3 + c] = r.albedo.pixels[3 * p + c];
+      v[6 + c] = r.specular.pixels.empty() ? 0.0f : r.specular.pixels[3 * p + c];
+    }
+    v[9] = r.residual.pixels[p];
+    v[10] = r.model_map.pixels.empty() ? -1.0f : r.model_map.pixels[p];
+  }
+  return out;
+}
+
+solve::NormalResult ResultFromMaps(const py::object& maps_in, bool specular, bool model_map) {
+  const FloatStack maps = FloatStack::ensure(maps_in);
+  if (!maps || maps.ndim() != 3 || maps.shape(2) != 11) {
+    throw std::invalid_argument("maps: expected (h, w, 11) float32 as solve_normals_block gives");
+  }
+  const int h = static_cast<int>(maps.shape(0)), w = static_cast<int>(maps.shape(1));
+  solve::NormalResult r;
+  r.normals = ImageF(w, h, 3);
+  r.albedo = ImageF(w, h, 3);
+  if (specular) r.specular = ImageF(w, h, 3);
+  r.residual = ImageF(w, h, 1);
+  if (model_map) r.model_map = ImageF(w, h, 1);
+  const float* v = maps.data();
+  for (std::size_t p = 0; p < std::size_t(h) * w; ++p, v += 11) {
+    for (int c = 0; c < 3; ++c) {
+      r.normals.pixels[3 * p + c] = v[c];
+      r.albedo.pixels[3 * p + c] = v[3 + c];
+      if (specular) r.specular.pixels[3 * p + c] = v[6 + c];
+    }
+    r.residual.pixels[p] = v[9];
+    if (model_map) r.model_map.pixels[p] = v[10];
+  }
+  return r;
+}
 
 void BindSolve(py::module_& m) {
   m.def(
@@ -269,20 +312,7 @@ dict of plain values for solve_normals_block. Arguments as estimate_normals.)doc
           py::gil_scoped_release release;
           r = solve::SolveNormalsWithPlan(data, plan);
         }
-        const std::size_t h = data.height, w = data.width;
-        py::array_t<float> out({h, w, std::size_t{11}});
-        float* o = out.mutable_data();
-        for (std::size_t p = 0; p < h * w; ++p) {
-          float* v = o + 11 * p;
-          for (int c = 0; c < 3; ++c) {
-            v[c] = r.normals.pixels[3 * p + c];
-            v[3 + c] = r.albedo.pixels[3 * p + c];
-            v[6 + c] = r.specular.pixels.empty() ? 0.0f : r.specular.pixels[3 * p + c];
-          }
-          v[9] = r.residual.pixels[p];
-          v[10] = r.model_map.pixels.empty() ? -1.0f : r.model_map.pixels[p];
-        }
-        return out;
+        return MapsArray(r);
       },
       py::arg("images"), py::arg("mask"), py::arg("light_directions"),
       py::arg("light_intensities") = py::none(), py::arg("plan"), py::arg("threads") = 1,

@@ -32,4 +32,5 @@ PYBIND11_MODULE(_core, m) {
   iphong::python::BindIntegrate(m);
   iphong::python::BindMaterial(m);
   iphong::python::BindIo(m);
+  iphong::python::BindNear(m);
 }

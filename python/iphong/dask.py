@@ -33,10 +33,53 @@ def _solve_block(images, mask, light_directions, light_intensities, plan, thread
                                      threads)
 
 
+def _refine_block(images, mask, plan, lights, points, previous, model_map, threads):
+    return _core.refine_normals_block(images, mask, plan, lights, points, previous, model_map,
+                                      threads)
+
+
+def _effective_distance(images, mask_np, mask_da, masked, directions, intensities, plan,
+                        distant, model, material, discard_dark, discard_bright, fast,
+                        shadow_threshold, plan_sample, light_distance, threads):
+    """The effective light distance after the distant solve in blocks (its maps computed):
+    returns the maps to report (a dask array of the images' chunks) and the choice."""
+    import dask.array as da
+
+    k, h, w, _ = images.shape
+    by_pixel = images.transpose(1, 2, 0, 3)
+    chunks = images.chunks[1:3]
+
+    def observations(sets):
+        out = []
+        for indices in sets:
+            positions = masked[_np.asarray(indices, dtype=_np.int64)]
+            rows, cols = _np.divmod(positions, w)
+            out.append(by_pixel.vindex[rows, cols].compute() if positions.size
+                       else _np.zeros((0, k, 3), _np.float32))
+        return out
+
+    def refine(lights, near_plan, previous, model_map):
+        points = _np.zeros((h * w, 3))
+        points[masked] = lights.pop("points")
+        points = da.from_array(points.reshape(h, w, 3), chunks=(*chunks, 3))
+        before = da.from_array(previous, chunks=(*chunks, 11))
+        blocks = da.blockwise(_refine_block, "hwc", images, "khwd", mask_da, "hw", near_plan, None,
+                              lights, None, points, "hwe", before, "hwc", model_map, None,
+                              threads, None, concatenate=True, dtype=_np.float32,
+                              meta=_np.empty((0, 0, 0), _np.float32))
+        return blocks.compute()
+
+    choice = _core.effective_distance_pieces(
+        mask_np, directions, intensities, plan, distant, model, material, discard_dark,
+        discard_bright, fast, shadow_threshold, plan_sample, light_distance, observations, refine)
+    maps = choice.get("maps", distant)
+    return da.from_array(maps, chunks=(*chunks, 11)), choice
+
+
 def estimate_normals(images, light_directions, light_intensities=None, mask=None, model=None,
                      material=None, discard_dark=0.3, discard_bright=0.1, fast=False,
                      shadow_threshold=0.1, plan_sample=131072, threads_per_block=1, *,
-                     encoding=None):
+                     encoding=None, light_distance="auto"):
     """iphong.estimate_normals on a dask.array (K, H, W, 3), chunked over H and W only.
 
     mask: (H, W) bool (numpy or dask) or None (every pixel). Returns a dict: normals, albedo,
@@ -44,9 +87,14 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     model, shininess, ambient_term and the plan (decided now, on the plan sample); ks, a lazy
     (3,) array: the median ks of the plan sample's solved pixels that kept the lobe, as
     estimate_normals reports it.
-    Lights are distant: the same as iphong.estimate_normals with light_distance='inf' (an
-    effective light distance is not searched here; the in-memory run and the command line's
-    bands search one by default and may take it: DiLiGenT's cat, ball and harvest do). Integer images (uint8, uint16) need encoding='linear' or 'srgb', as in
+    light_distance: as iphong.estimate_normals: 'auto' (default) chooses an effective light
+    distance when the images say the lights are near (DiLiGenT's cat, ball and harvest do), 'inf'
+    keeps them distant, a number (pixels) gives it. Except with 'inf', the distant maps are
+    computed here (the surface that places each pixel's lights needs the whole normal map), D is
+    chosen on the same pixels as in memory, and each near pass maps the blocks again; the maps
+    returned are then in memory, wrapped as dask arrays with the images' chunks, and equal to
+    iphong.estimate_normals' bit for bit; r['effective_distance'] says what was chosen. With
+    'inf' everything stays lazy. Integer images (uint8, uint16) need encoding='linear' or 'srgb', as in
     iphong.estimate_normals (scaled to [0, 1], the sRGB curve undone; each block lazily); float
     images with encoding='srgb' are linearized.
     Raises ValueError for inconsistent shapes or chunks over K or the colour axis.
@@ -114,12 +162,28 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
                            intensities, None, plan, None, threads_per_block, None,
                            new_axes={"c": 11}, concatenate=True, dtype=_np.float32,
                            meta=_np.empty((0, 0, 0), _np.float32))
+    effective = None
+    if light_distance != "inf" and k >= 3:
+        stacked, effective = _effective_distance(
+            images, mask_np, mask_da, masked, directions, intensities, plan, stacked.compute(),
+            model, material, discard_dark, discard_bright, fast, shadow_threshold, plan_sample,
+            light_distance, threads_per_block)
     out = {name: stacked[..., index] for name, index in _MAPS.items()}
     out["model"] = plan["options"]["model"]
     out["shininess"] = plan["options"]["shininess"]
     out["ambient_term"] = _np.asarray(plan["options"]["ambient_term"])
     out["code_offset"] = plan["options"]["code_offset"]
     out["plan"] = plan
+    if effective is not None:
+        maps = effective.pop("maps", None)
+        out["effective_distance"] = effective
+        if maps is not None:  # a finite distance: the last near pass's result
+            for key in ("model", "shininess", "code_offset"):
+                out[key] = effective.pop(key)
+            out["ambient_term"] = _np.asarray(effective.pop("ambient_term"))
+            out["ks"] = da.from_array(_np.asarray(effective.pop("ks")))
+            out["height"] = effective.pop("height")
+            return out
 
     def median_ks(specular, residual, model_map):
         # The pixels the per-pixel test gave to Lambert (model_map 0) have ks 0 by choice: left

@@ -149,9 +149,40 @@ def test_integer_images_need_an_encoding_as_in_estimate_normals(capture):
     albedo, normals = dask.compute(lazy["albedo"], lazy["normals"], scheduler="threads")
     np.testing.assert_array_equal(normals, eager["normals"])
     np.testing.assert_array_equal(albedo, eager["albedo"])
-    # 'srgb' undoes the curve block by block: the same as handing over linearized floats.
-    lazy = idask.estimate_normals(images, *args, encoding="srgb")
+    # 'srgb' undoes the curve block by block: the same as handing over linearized floats (both
+    # lazy: distant lights).
+    lazy = idask.estimate_normals(images, *args, encoding="srgb", light_distance="inf")
     floats = iphong._core._srgb_to_linear(codes.astype(np.float32) / 255)
-    same = idask.estimate_normals(da.from_array(floats, chunks=(-1, 20, 24, -1)), *args)
+    same = idask.estimate_normals(da.from_array(floats, chunks=(-1, 20, 24, -1)), *args,
+                                  light_distance="inf")
     np.testing.assert_array_equal(*dask.compute(lazy["normals"], same["normals"],
                                                 scheduler="threads"))
+
+
+def test_effective_light_distance_equals_the_whole():
+    """A matte sphere under a dome of 24 point lights at 1.5 object sizes, given by direction
+    only: the in-memory run chooses an effective light distance and runs its near passes; Dask
+    chooses the same on the same pixels, maps the blocks for each pass, and gives the same maps
+    bit for bit (before, it kept the lights distant and differed)."""
+    scene = json.loads((pathlib.Path(__file__).parents[2] / "fixtures" / "scenes"
+                        / "near_dome_lambert.json").read_text())
+    scene.update(width=120, height=96, output={})
+    scene["camera"].update(fx=260, fy=260, cx=60, cy=48)
+    scene["objects"][0]["subdivisions"] = 5
+    out = iphong.render(scene, per_light=True)
+    args = (out["light_directions"], out["light_intensities"], out["mask"])
+    whole = iphong.estimate_normals(out["images"], *args)
+    assert whole["effective_distance"]["distance_px"] != float("inf")
+    r = idask.estimate_normals(da.from_array(out["images"], chunks=(-1, 25, 31, -1)), *args)
+    assert r["effective_distance"]["distance_px"] == whole["effective_distance"]["distance_px"]
+    assert len(r["effective_distance"]["passes"]) >= 1
+    for name in MAPS:
+        np.testing.assert_array_equal(r[name].compute(), whole[name], err_msg=name)
+    assert r["model"] == whole["model"] and r["shininess"] == whole["shininess"]
+    np.testing.assert_array_equal(r["ks"].compute(), whole["ks"])
+    # Distant lights asked for: lazy, and the distant solve's maps.
+    distant = idask.estimate_normals(da.from_array(out["images"], chunks=(-1, 25, 31, -1)), *args,
+                                     light_distance="inf")
+    assert "effective_distance" not in distant
+    far = iphong.estimate_normals(out["images"], *args, light_distance="inf")
+    np.testing.assert_array_equal(distant["normals"].compute(), far["normals"])
