@@ -46,16 +46,9 @@ PhotometricData NearData(const PhotometricData& data, const geometry::HeightMapF
 
 // data without its observations.
 PhotometricData LayoutOf(const PhotometricData& data) {
-  PhotometricData out;
-  out.width = data.width;
-  out.height = data.height;
-  out.images = data.images;
+  PhotometricData out = solve::SubsetObservations(data, {});
   out.pixels = data.pixels;
-  out.light_directions = data.light_directions;
-  out.light_intensities = data.light_intensities;
-  out.point_lights = data.point_lights;
   out.points_cam = data.points_cam;
-  out.perspective = data.perspective;
   return out;
 }
 
