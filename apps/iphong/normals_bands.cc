@@ -130,21 +130,14 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
   // The field averaged over f×f blocks for the light file's frame check: the whole capture's
   // normals are never in memory at once here.
   const int f = std::max(1, (std::max(width, height) + 255) / 256);
-  const int small_w = (width + f - 1) / f, small_h = (height + f - 1) / f;
-  std::vector<double> block_sum(std::size_t(small_w) * small_h * 3, 0.0);
-  std::vector<int> block_in(std::size_t(small_w) * small_h, 0), block_all(block_in.size(), 0);
+  integrate::NormalBlockAverage blocks(width, height, f);
   const auto write = [&](int y0, const solve::NormalResult& band) {
     const int rows = band.normals.height;
-    for (int r = 0; r < rows; ++r) {
-      for (int c = 0; c < width; ++c) {
-        const std::size_t p = std::size_t(r) * width + c;
-        const std::size_t b = std::size_t((y0 + r) / f) * small_w + c / f;
-        ++block_all[b];
-        if (!dataset.mask.inside[std::size_t(y0 + r) * width + c] || band.residual.pixels[p] < 0)
-          continue;
-        ++block_in[b];
-        for (int k3 = 0; k3 < 3; ++k3) block_sum[3 * b + k3] += band.normals.pixels[3 * p + k3];
-      }
+    {
+      Mask solved = BandMask(dataset.mask, y0, y0 + rows);
+      for (std::size_t p = 0; p < solved.inside.size(); ++p)
+        solved.inside[p] = solved.inside[p] && band.residual.pixels[p] >= 0;
+      blocks.AddRows(y0, band.normals, solved);
     }
     if (!normals) {
       normals = std::make_unique<io::ImageRowWriter>(out.file("normals.exr"), width, height, 3);
@@ -213,15 +206,9 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
   progress.reset();
   std::optional<integrate::FrameCheckResult> frame;
   {
-    ImageF small(small_w, small_h, 3, 0.0f);
-    Mask small_mask(small_w, small_h, false);
-    for (std::size_t b = 0; b < block_in.size(); ++b) {
-      const Vec3d sum(block_sum[3 * b], block_sum[3 * b + 1], block_sum[3 * b + 2]);
-      if (2 * block_in[b] < block_all[b] || !(sum.norm() > 0)) continue;
-      const Vec3d n = sum.normalized();
-      for (int k3 = 0; k3 < 3; ++k3) small.pixels[3 * b + k3] = static_cast<float>(n[k3]);
-      small_mask.inside[b] = 1;
-    }
+    ImageF small;
+    Mask small_mask;
+    blocks.Result(&small, &small_mask);
     frame = CheckLightFrame(o, dataset, small, small_mask);  // --strict: throws, nothing committed
   }
   for (auto* w : {&normals, &picture, &albedo, &residual, &specular, &model})

@@ -38,33 +38,9 @@ Vec3T<T> Apply(PlaneReading reading, const Vec3T<T>& v) {
 // The field averaged over f×f blocks (a block is kept when at least half of it is inside and
 // its mean normal is not zero), normalized.
 void Downsample(const ImageF& normals, const Mask& mask, int f, ImageF* out, Mask* out_mask) {
-  const int w = (mask.width + f - 1) / f, h = (mask.height + f - 1) / f;
-  *out = ImageF(w, h, 3, 0.0f);
-  *out_mask = Mask(w, h, false);
-  for (int br = 0; br < h; ++br) {
-    for (int bc = 0; bc < w; ++bc) {
-      Vec3d sum = Vec3d::Zero();
-      int inside = 0, total = 0;
-      for (int r = br * f; r < std::min(mask.height, (br + 1) * f); ++r) {
-        for (int c = bc * f; c < std::min(mask.width, (bc + 1) * f); ++c) {
-          ++total;
-          const std::size_t p = static_cast<std::size_t>(r) * mask.width + c;
-          if (!mask.inside[p]) continue;
-          const float* n = normals.pixels.data() + 3 * p;
-          const Vec3d v(n[0], n[1], n[2]);
-          if (v.norm() == 0) continue;
-          sum += v.normalized();
-          ++inside;
-        }
-      }
-      if (2 * inside < total || !(sum.norm() > 1e-6 * inside)) continue;
-      const Vec3d n = sum.normalized();
-      float* o = out->at(bc, br);
-      o[0] = static_cast<float>(n.x()), o[1] = static_cast<float>(n.y());
-      o[2] = static_cast<float>(n.z());
-      out_mask->inside[static_cast<std::size_t>(br) * w + bc] = 1;
-    }
-  }
+  NormalBlockAverage average(mask.width, mask.height, f);
+  average.AddRows(0, normals, mask);
+  average.Result(out, out_mask);
 }
 
 // Mean angle (degrees) between the field and the normals of its least-squares surface.
@@ -145,6 +121,49 @@ std::string FrameCheckOptions::Validate() const {
   if (!(integrability_ratio >= 1) || !std::isfinite(integrability_ratio))
     return "integrability_ratio must be finite and at least 1";
   return "";
+}
+
+NormalBlockAverage::NormalBlockAverage(int width, int height, int factor)
+    : width_(width), height_(height), factor_(std::max(1, factor)) {
+  blocks_w_ = (width_ + factor_ - 1) / factor_;
+  blocks_h_ = (height_ + factor_ - 1) / factor_;
+  const std::size_t blocks = static_cast<std::size_t>(blocks_w_) * blocks_h_;
+  sum_.assign(3 * blocks, 0.0);
+  used_.assign(blocks, 0);
+  seen_.assign(blocks, 0);
+}
+
+void NormalBlockAverage::AddRows(int y0, const ImageF& rows, const Mask& usable) {
+  if (rows.width != width_ || usable.width != width_ || usable.height != rows.height ||
+      rows.channels != 3 || y0 < 0 || y0 + rows.height > height_) {
+    throw std::invalid_argument("block average: rows outside the field");
+  }
+  for (int r = 0; r < rows.height; ++r) {
+    for (int c = 0; c < width_; ++c) {
+      const std::size_t b = static_cast<std::size_t>((y0 + r) / factor_) * blocks_w_ + c / factor_;
+      ++seen_[b];
+      const std::size_t p = static_cast<std::size_t>(r) * width_ + c;
+      if (!usable.inside[p]) continue;
+      const float* n = rows.pixels.data() + 3 * p;
+      const Vec3d v(n[0], n[1], n[2]);
+      if (v.norm() == 0) continue;
+      const Vec3d u = v.normalized();
+      for (int k = 0; k < 3; ++k) sum_[3 * b + k] += u[k];
+      ++used_[b];
+    }
+  }
+}
+
+void NormalBlockAverage::Result(ImageF* field, Mask* kept) const {
+  *field = ImageF(blocks_w_, blocks_h_, 3, 0.0f);
+  *kept = Mask(blocks_w_, blocks_h_, false);
+  for (std::size_t b = 0; b < used_.size(); ++b) {
+    const Vec3d sum(sum_[3 * b], sum_[3 * b + 1], sum_[3 * b + 2]);
+    if (2 * used_[b] < seen_[b] || !(sum.norm() > 1e-6 * used_[b])) continue;
+    const Vec3d n = sum.normalized();
+    for (int k = 0; k < 3; ++k) field->pixels[3 * b + k] = static_cast<float>(n[k]);
+    kept->inside[b] = 1;
+  }
 }
 
 FrameCheckResult CheckNormalFrame(const ImageF& normals_cam, const Mask& mask,

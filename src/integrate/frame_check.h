@@ -82,6 +82,24 @@ struct FrameCheckResult {
   std::string message;
 };
 
+// A normal field averaged over factor × factor blocks, fed a band of rows at a time (captures
+// solved in bands) or whole: a block is kept when at least half its pixels hold a normal, and its
+// normal is the normalized mean of their unit normals. CheckNormalFrame integrates such a field.
+class NormalBlockAverage {
+ public:
+  NormalBlockAverage(int width, int height, int factor);
+  // Rows [y0, y0 + rows.height) of the field; `usable` (the same rows) says which pixels hold a
+  // normal (zero normals are left out too).
+  void AddRows(int y0, const ImageF& rows, const Mask& usable);
+  // The averaged field (3 channels, 0 where a block is not kept) and the kept blocks.
+  void Result(ImageF* field, Mask* kept) const;
+
+ private:
+  int width_, height_, factor_, blocks_w_, blocks_h_;
+  std::vector<double> sum_;       // 3 per block
+  std::vector<int> used_, seen_;  // pixels with a normal, pixels, per block
+};
+
 // Throws std::invalid_argument when sizes differ or the mask holds a non-finite normal. Normals
 // need not be unit (they are normalized); zero normals are left out.
 FrameCheckResult CheckNormalFrame(const ImageF& normals_cam, const Mask& mask,
