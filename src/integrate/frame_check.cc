@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "geometry/height_map.h"
 #include "integrate/integrate.h"
 
 namespace iphong::integrate {
@@ -50,39 +51,19 @@ double ConsistencyDeg(const ImageF& normals, const Mask& mask, int threads) {
   options.allow_back_facing = true;
   options.threads = threads;
   const IntegrateResult r = IntegrateNormals(normals, mask, options);
-  const int w = mask.width, h = mask.height;
-  auto in = [&](int c, int row) {
-    return c >= 0 && row >= 0 && c < w && row < h &&
-           mask.inside[static_cast<std::size_t>(row) * w + c];
-  };
-  auto z = [&](int c, int row) { return double(r.height.pixels[std::size_t(row) * w + c]); };
-  // One-sided where a neighbour is missing; pixels with no neighbour along an axis are skipped.
-  auto slope = [&](int c, int row, int dc, int dr, double* out) {
-    const bool fwd = in(c + dc, row + dr), back = in(c - dc, row - dr);
-    if (fwd && back)
-      *out = 0.5 * (z(c + dc, row + dr) - z(c - dc, row - dr));
-    else if (fwd)
-      *out = z(c + dc, row + dr) - z(c, row);
-    else if (back)
-      *out = z(c, row) - z(c - dc, row - dr);
-    else
-      return false;
-    return true;
-  };
+  // The surface's own normals (a pixel per unit, orthographic): central differences, one-sided
+  // where a neighbour is missing, none where a pixel has no neighbour along an axis.
+  const ImageF back = geometry::NormalsFromHeightMap(r.height, mask, geometry::HeightMapFrame{});
   double sum = 0;
   std::size_t count = 0;
-  for (int row = 0; row < h; ++row) {
-    for (int c = 0; c < w; ++c) {
-      if (!in(c, row)) continue;
-      double d_col, d_row;
-      if (!slope(c, row, 1, 0, &d_col) || !slope(c, row, 0, 1, &d_row)) continue;
-      // p = ∂z/∂x = ∂z/∂col, q = ∂z/∂y = −∂z/∂row; the surface normal is (−p, −q, 1).
-      const Vec3d back = Vec3d(-d_col, d_row, 1).normalized();
-      const float* n = normals.at(c, row);
-      const double cos = std::clamp(back.dot(Vec3d(n[0], n[1], n[2])), -1.0, 1.0);
-      sum += std::acos(cos) * 180 / M_PI;
-      ++count;
-    }
+  for (std::size_t p = 0; p < mask.inside.size(); ++p) {
+    const float* b = back.pixels.data() + 3 * p;
+    if (!mask.inside[p] || (b[0] == 0 && b[1] == 0 && b[2] == 0)) continue;
+    const float* n = normals.pixels.data() + 3 * p;
+    const double cos =
+        std::clamp(double(b[0]) * n[0] + double(b[1]) * n[1] + double(b[2]) * n[2], -1.0, 1.0);
+    sum += std::acos(cos) * 180 / M_PI;
+    ++count;
   }
   return count ? sum / count : std::numeric_limits<double>::quiet_NaN();
 }
