@@ -84,9 +84,10 @@ EffectiveDistanceResult SolveEffectiveDistanceInBands(const solve::BandSource& s
                                                       int band_rows,
                                                       const EffectiveDistanceOptions& options,
                                                       const solve::BandProgress& progress = {});
-// Memory the whole-field part needs per masked pixel (the results of two passes, the surface,
-// its points and the integration), beside the bands themselves.
-constexpr double kEffectiveDistanceBytesPerPixel = 2 * 11 * 4 + 8 + 24 + 4 + 120;
+// Memory the whole-field part needs per masked pixel, beside the bands themselves: the results
+// of two passes (11 floats each), the depth, the surface point, the pixel index, and the
+// integration (its multigrid conjugate gradient reports about 160 bytes a pixel).
+constexpr double kEffectiveDistanceBytesPerPixel = 2 * 11 * 4 + 8 + 24 + 4 + 160;
 
 // What the choice of D and the near passes read of a capture, held whole or in bands.
 struct DistanceCapture {
