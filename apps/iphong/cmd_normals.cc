@@ -150,6 +150,7 @@ void RunNormals(const NormalsCommandOptions& o) {
 
   const double load_seconds = SecondsSince(total_start);
   std::optional<calibrate::IntensityEstimate> estimated;
+  nlohmann::json estimated_vs_file;
   if (o.estimate_intensities) {
     calibrate::IntensityOptions intensity_options;
     intensity_options.threads = o.common.threads;
@@ -158,10 +159,38 @@ void RunNormals(const NormalsCommandOptions& o) {
     } catch (const std::invalid_argument& e) {
       throw std::runtime_error(o.dataset + ": --estimate-intensities: " + e.what());
     }
-    loaded.observations.light_intensities = estimated->light_intensities;
     Say(o.common, "Estimated the %d lights' intensities in %.2f s (eigenvalue gap %.1f%s)\n",
         loaded.observations.images, estimated->seconds, estimated->eigen_gap,
         estimated->code_offset > 0 ? "; integer codes taken as truncated" : "");
+    // Intensities from a file too (calibrated ones, usually): how far the estimate moves the
+    // normals from theirs, said, and a warning past a degree.
+    const std::string& source = dataset.files.intensities_source;
+    if (loaded.observations.images >= 3 && source.rfind("all 1", 0) != 0 &&
+        source.rfind("not read", 0) != 0) {
+      const calibrate::IntensityComparison c =
+          calibrate::CompareIntensities(loaded.observations, loaded.observations.light_intensities,
+                                        estimated->light_intensities, NormalOptionsFor(o, dataset));
+      estimated_vs_file = {{"file", source},
+                           {"median_relative_difference", c.median_relative},
+                           {"max_relative_difference", c.max_relative},
+                           {"normals_moved_deg", c.normals_moved_deg},
+                           {"seconds", c.seconds}};
+      char text[400];
+      std::snprintf(text, sizeof text,
+                    "%s: the estimated intensities differ from this file's by %.1f%% (median; at "
+                    "most %.1f%%), and the normals under the two by %.2f deg on average",
+                    source.c_str(), 100 * c.median_relative, 100 * c.max_relative,
+                    c.normals_moved_deg);
+      if (c.normals_moved_deg > 1) {
+        Warn(std::string(text) +
+             ": one of them is off (the estimate reads what Lambert's law explains in the images, "
+             "cast shadows and interreflections included; intensities measured on a target are "
+             "usually the better ones): compare with a run without --estimate-intensities");
+      } else {
+        Say(o.common, "%s (compared in %.1f s)\n", text, c.seconds);
+      }
+    }
+    loaded.observations.light_intensities = estimated->light_intensities;
   }
   const solve::PhotometricData& data = loaded.observations;  // masked pixels only
 
@@ -244,6 +273,9 @@ void RunNormals(const NormalsCommandOptions& o) {
     metrics["estimated_intensities"] = {{"seconds", estimated->seconds},
                                         {"eigen_gap", estimated->eigen_gap},
                                         {"lambert_residual", estimated->lambert_residual}};
+    if (!estimated_vs_file.is_null()) {
+      metrics["estimated_intensities"]["against_file"] = estimated_vs_file;
+    }
   }
   if (frame) metrics["frame_check"] = FrameCheckJson(*frame);
   metrics["dark_pixels"] = result.summary.dark_pixels;

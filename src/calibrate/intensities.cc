@@ -10,6 +10,7 @@
 #include "core/parallel.h"
 #include "core/timing.h"
 #include "solve/model_choice.h"
+#include "solve/normals.h"
 
 namespace iphong::calibrate {
 
@@ -226,6 +227,62 @@ IntensityEstimate EstimateIntensities(const solve::PhotometricData& data,
   }
   if (!best) throw std::invalid_argument(refused);
   return *best;
+}
+
+IntensityComparison CompareIntensities(const solve::PhotometricData& data,
+                                       const std::vector<Rgb>& given,
+                                       const std::vector<Rgb>& estimated,
+                                       const solve::NormalOptions& options) {
+  const auto start = Clock::now();
+  const std::size_t k = static_cast<std::size_t>(data.images);
+  if (given.size() != k || estimated.size() != k || k < 3) {
+    throw std::invalid_argument("one intensity per image (3 images or more) expected");
+  }
+  IntensityComparison c;
+  std::vector<double> relative;
+  // The given set at the estimate's scale: a plan's absolute terms (the ambient term, the ks
+  // prior) hold at one scale only, and the scale is not what is compared.
+  std::vector<Rgb> scaled = given;
+  for (int ch = 0; ch < 3; ++ch) {
+    double mean_given = 0, mean_estimated = 0;
+    for (std::size_t j = 0; j < k; ++j) {
+      mean_given += given[j][ch];
+      mean_estimated += estimated[j][ch];
+    }
+    for (std::size_t j = 0; j < k; ++j) {
+      scaled[j][ch] = given[j][ch] / mean_given * mean_estimated;
+      relative.push_back(std::abs(estimated[j][ch] / scaled[j][ch] - 1));
+    }
+  }
+  std::sort(relative.begin(), relative.end());
+  c.median_relative = relative[relative.size() / 2];
+  c.max_relative = relative.back();
+
+  solve::PhotometricData under = data;
+  under.light_intensities = estimated;
+  const std::vector<std::size_t> sample =
+      solve::PlanSampleIndices(under.pixel_count(), options.plan_sample);
+  const solve::NormalPlan plan =
+      sample.size() == under.pixel_count()
+          ? solve::PlanNormals(under, options)
+          : solve::PlanNormals(solve::SubsetObservations(under, sample), options);
+  const solve::NormalResult b = solve::SolveNormalsWithPlan(under, plan);
+  under.light_intensities = scaled;
+  const solve::NormalResult a = solve::SolveNormalsWithPlan(under, plan);
+  double sum = 0;
+  std::size_t n = 0;
+  for (int p : data.pixels) {
+    if (a.residual.pixels[p] < 0 || b.residual.pixels[p] < 0) continue;
+    const float* u = a.normals.pixels.data() + 3 * std::size_t(p);
+    const float* v = b.normals.pixels.data() + 3 * std::size_t(p);
+    const double cos =
+        std::clamp(double(u[0]) * v[0] + double(u[1]) * v[1] + double(u[2]) * v[2], -1.0, 1.0);
+    sum += std::acos(cos) * 180 / M_PI;
+    ++n;
+  }
+  c.normals_moved_deg = n ? sum / n : 0;
+  c.seconds = SecondsSince(start);
+  return c;
 }
 
 }  // namespace iphong::calibrate

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "core/types.h"
+#include "solve/normals.h"
 #include "solve/photometric_data.h"
 
 namespace iphong::calibrate {
@@ -223,6 +224,21 @@ struct IntensityEstimate {
 // for the estimate (no positive solution, or a residual over max_residual).
 IntensityEstimate EstimateIntensities(const solve::PhotometricData& data,
                                       const IntensityOptions& options);
+
+// Estimated intensities against given ones (a light_intensities.txt): how far apart they are,
+// each scaled to mean 1 per channel (per light and channel, |estimated / given − 1|), and how far
+// apart they put the normals: one plan (`options`' model choice, made under the estimate) fitted
+// under each, the mean angle over the pixels both solve. Neither run can say which set is right;
+// the normals' figure is what a user needs to hear when they disagree.
+struct IntensityComparison {
+  double median_relative = 0, max_relative = 0;
+  double normals_moved_deg = 0;
+  double seconds = 0;
+};
+IntensityComparison CompareIntensities(const solve::PhotometricData& data,
+                                       const std::vector<Rgb>& given,
+                                       const std::vector<Rgb>& estimated,
+                                       const solve::NormalOptions& options);
 
 // Directions from two points of view: the closest point between two rays and their gap.
 Vec3d ClosestPoint(const Vec3d& origin_a, const Vec3d& dir_a, const Vec3d& origin_b,

@@ -256,6 +256,22 @@ def test_normals_estimate_intensities_ignores_the_intensity_file(tmp_path):
     metrics = json.loads((tmp_path / "out" / "metrics.json").read_text())
     assert metrics["estimated_intensities"]["eigen_gap"] > 2
     assert metrics["mean_angular_error_deg"] < 0.5  # 0.29 measured
+    # The file is compared with the estimate (up to scale it is right here): said, no warning.
+    against = metrics["estimated_intensities"]["against_file"]
+    assert against["file"].endswith("light_intensities.txt")
+    assert against["normals_moved_deg"] < 1 and "differ from this file" not in err
+    assert "the estimated intensities differ from this file's by" in stdout
+    # A file off by 30 % on every other light: the estimate disagrees and the user hears it. The
+    # figure bounds how much worse either run can be than the other (a triangle inequality).
+    (dataset / "light_intensities.txt").write_text("0.7 0.7 0.7\n1.3 1.3 1.3\n" * 6)
+    code, stdout, err = run("normals", dataset, "--estimate-intensities", "-o", tmp_path / "off")
+    assert code == 0, err
+    assert re.search(r"light_intensities\.txt: the estimated intensities differ from this file's "
+                     r"by [0-9.]+% \(median; at most [0-9.]+%\), and the normals under the two "
+                     r"by [0-9.]+ deg on average: one of them is off", err), err
+    off = json.loads((tmp_path / "off" / "metrics.json").read_text())
+    against = off["estimated_intensities"]["against_file"]
+    assert against["median_relative_difference"] > 0.25 and against["normals_moved_deg"] > 1
 
 
 @pytest.mark.parametrize("args, code, pattern", [
