@@ -227,23 +227,20 @@ void BindNear(py::module_& m) {
          int threads) {
         const solve::NormalPlan plan = PlanFrom(plan_in);
         const std::size_t k = py::len(light_directions);
-        solve::NormalResult distant =
-            ResultFromMaps(distant_maps, plan.options.model != reflectance::Lobe::kLambert, false);
-        const int w = distant.normals.width, h = distant.normals.height;
-        const Mask mask = ToMask(mask_in, w, h);
-        bool has_map = false;  // whether the blocks made a model map (a pixel chose 0 or 1)
-        {
-          const FloatStack maps = FloatStack::ensure(distant_maps);
-          for (std::size_t p = 0; p < std::size_t(w) * h && !has_map; ++p)
-            has_map = maps.data()[11 * p + 10] != -1.0f;
+        const FloatStack maps = FloatStack::ensure(distant_maps);
+        if (!maps || maps.ndim() != 3 || maps.shape(2) != 11) {
+          throw std::invalid_argument("distant_maps: expected (H, W, 11) as solve_normals_block");
         }
-        if (has_map) distant = ResultFromMaps(distant_maps, !distant.specular.pixels.empty(), true);
-        solve::PhotometricData layout;
-        layout.width = w;
-        layout.height = h;
-        layout.images = static_cast<int>(k);
-        layout.light_directions = ToDirections(light_directions, k);
-        layout.light_intensities = Intensities(light_intensities, k);
+        const int h = static_cast<int>(maps.shape(0)), w = static_cast<int>(maps.shape(1));
+        // Whether the blocks made a model map: a pixel chose 0 (Lambert) or 1 (the lobe).
+        bool has_map = false;
+        for (std::size_t p = 0; p < std::size_t(w) * h && !has_map; ++p)
+          has_map = maps.data()[11 * p + 10] != -1.0f;
+        solve::NormalResult distant =
+            ResultFromMaps(maps, plan.options.model != reflectance::Lobe::kLambert, has_map);
+        const Mask mask = ToMask(mask_in, w, h);
+        solve::PhotometricData layout =
+            NoObservations(w, h, light_directions, light_intensities, k);
         for (int p = 0; p < w * h; ++p)
           if (mask.inside[p]) layout.pixels.push_back(p);
         near::EffectiveDistanceOptions e;
@@ -263,12 +260,7 @@ void BindNear(py::module_& m) {
                 std::size_t(obs.shape(1)) != k || obs.shape(2) != 3) {
               throw std::invalid_argument("observations: expected (n, K, 3) for each set");
             }
-            solve::PhotometricData d;
-            d.width = w;
-            d.height = h;
-            d.images = static_cast<int>(k);
-            d.light_directions = layout.light_directions;
-            d.light_intensities = layout.light_intensities;
+            solve::PhotometricData d = solve::SubsetObservations(layout, {});
             for (std::size_t i : sets[s]) d.pixels.push_back(layout.pixels[i]);
             d.values.assign(obs.data(), obs.data() + sets[s].size() * k * 3);
             out.push_back(std::move(d));
@@ -279,21 +271,11 @@ void BindNear(py::module_& m) {
                              const solve::NormalPlan& near_plan,
                              const solve::NormalResult& previous) {
           const bool map = !previous.model_map.pixels.empty();
-          const py::object maps =
+          const py::object refined =
               refine(NearLightsDict(near_layout), PlanDict(near_plan), MapsArray(previous), map);
           solve::NormalResult r =
-              ResultFromMaps(maps, near_plan.options.model != reflectance::Lobe::kLambert, map);
-          // The whole-object fields RefineNormalsWithPlan sets (AssembleNormals, the previous).
-          const solve::NormalOptions& po = near_plan.options;
-          r.model = po.model;
-          r.shininess = po.shininess;
-          r.ambient_term = po.ambient_term;
-          r.code_offset = po.code_offset;
-          r.ks = previous.ks;
-          r.model_choice = near_plan.model_choice;
-          r.material_estimated = previous.material_estimated;
-          r.specular_identifiable = previous.specular_identifiable;
-          r.specular_note = previous.specular_note;
+              ResultFromMaps(refined, near_plan.options.model != reflectance::Lobe::kLambert, map);
+          solve::SetRefinedFields(r, near_plan, previous);
           return r;
         };
         const near::EffectiveDistanceResult r =

@@ -83,6 +83,17 @@ std::vector<Vec3d> Intensities(const py::object& light_intensities, std::size_t 
                                      : ToRows(light_intensities, k, "light_intensities");
 }
 
+solve::PhotometricData NoObservations(int width, int height, const py::object& light_directions,
+                                      const py::object& light_intensities, std::size_t k) {
+  solve::PhotometricData data;
+  data.width = width;
+  data.height = height;
+  data.images = static_cast<int>(k);
+  data.light_directions = ToDirections(light_directions, k);
+  data.light_intensities = Intensities(light_intensities, k);
+  return data;
+}
+
 namespace {
 
 py::list ToList(const Vec3d& v) { return py::cast(std::vector<double>{v[0], v[1], v[2]}); }
@@ -260,12 +271,8 @@ void BindSolve(py::module_& m) {
           throw std::invalid_argument("positions: expected (n,) integers, one per observation row");
         }
         if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
-        solve::PhotometricData data;
-        data.width = width;
-        data.height = height;
-        data.images = static_cast<int>(k);
-        data.light_directions = ToDirections(light_directions, k);
-        data.light_intensities = Intensities(light_intensities, k);
+        solve::PhotometricData data =
+            NoObservations(width, height, light_directions, light_intensities, k);
         const std::int64_t* p = positions.data();
         for (std::size_t i = 0; i < n; ++i) {
           if (p[i] < 0 || p[i] >= std::int64_t{width} * height || (i > 0 && p[i] <= p[i - 1])) {

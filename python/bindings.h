@@ -23,6 +23,10 @@ solve::NormalOptions OptionsFrom(const pybind11::object& model, const pybind11::
                                  double shadow_threshold, int threads);
 // light_intensities (K, 3), or None: all ones.
 std::vector<Vec3d> Intensities(const pybind11::object& light_intensities, std::size_t k);
+// A capture's size and K lights (checked as estimate_normals checks them), no pixel yet.
+solve::PhotometricData NoObservations(int width, int height,
+                                      const pybind11::object& light_directions,
+                                      const pybind11::object& light_intensities, std::size_t k);
 // A plan as plain Python values (plan_normals), and back.
 pybind11::dict PlanDict(const solve::NormalPlan& plan);
 solve::NormalPlan PlanFrom(const pybind11::object& value);

@@ -165,8 +165,7 @@ void RunNormals(const NormalsCommandOptions& o) {
     // Intensities from a file too (calibrated ones, usually): how far the estimate moves the
     // normals from theirs, said, and a warning past a degree.
     const std::string& source = dataset.files.intensities_source;
-    if (loaded.observations.images >= 3 && source.rfind("all 1", 0) != 0 &&
-        source.rfind("not read", 0) != 0) {
+    if (loaded.observations.images >= 3 && dataset.files.intensities_from_file) {
       const calibrate::IntensityComparison c =
           calibrate::CompareIntensities(loaded.observations, loaded.observations.light_intensities,
                                         estimated->light_intensities, NormalOptionsFor(o, dataset));

@@ -306,6 +306,7 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
       c.light_intensities = ParseLightIntensities(ReadTextFile(rig_intensities.string()),
                                                   rig_intensities.string(), c.names.size());
       c.intensities_source = rig_intensities.string();
+      c.intensities_from_file = true;
     }
   } else if (c.layout == "DiLiGenT" && options.lights.empty()) {
     c.light_directions =
@@ -318,6 +319,7 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
     if (!lights.intensities.empty()) {
       c.light_intensities = std::move(lights.intensities);
       c.intensities_source = c.lights_path;
+      c.intensities_from_file = true;
     }
     if (!lights.image_names.empty() && c.names.empty()) {  // RTI: the .lp names the images
       c.names = lights.image_names;
@@ -385,6 +387,7 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
     c.light_intensities = ParseLightIntensities(ReadTextFile(intensities.string()),
                                                 intensities.string(), c.names.size());
     c.intensities_source = intensities.string();
+    c.intensities_from_file = true;
   } else if (c.light_intensities.empty()) {
     c.light_intensities.assign(c.names.size(), Vec3d::Ones());
     c.intensities_source = "all 1 (no light_intensities.txt)";

@@ -58,10 +58,11 @@ struct CaptureFiles {
   std::vector<Vec3d> light_directions;   // unit, camera frame (SPEC.md)
   std::vector<Vec3d> light_intensities;  // RGB
   std::string intensities_source;
-  std::string mask_path;          // "" = the whole image
-  std::string ground_truth_path;  // "" = none
-  std::string material_path;      // "" = none
-  std::string render_json;        // iphong's own render.json, which states the encoding
+  bool intensities_from_file = false;  // a file gave them (not all 1, not unread)
+  std::string mask_path;               // "" = the whole image
+  std::string ground_truth_path;       // "" = none
+  std::string material_path;           // "" = none
+  std::string render_json;             // iphong's own render.json, which states the encoding
   // Near lights (io/near_capture.h): light_positions.txt and camera.json; light_directions are
   // then the file's or, without one, those toward the positions from the object.
   NearLightFiles near;

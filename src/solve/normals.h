@@ -176,6 +176,10 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
 // data's image size; the whole-object summaries are copied from it.
 NormalResult RefineNormalsWithPlan(const PhotometricData& data, const NormalPlan& plan,
                                    const NormalResult& previous);
+// The whole-object fields RefineNormalsWithPlan gives its result (the plan's model and terms, its
+// model choice; the previous result's ks and notes, but for Woodham, whose pass is a solve of its
+// own), for results assembled from pieces refitted elsewhere (Dask blocks).
+void SetRefinedFields(NormalResult& result, const NormalPlan& plan, const NormalResult& previous);
 
 // Fills the whole-object summaries: ks is the per-channel median of the specular coefficients
 // of the solved plan-sample pixels that kept the lobe (`sample_ks`, one per such pixel,

@@ -73,13 +73,23 @@ NormalResult RefineNormalsWithPlan(const PhotometricData& data, const NormalPlan
   result.summary.pixels = pixels;
   result.summary.iterations = iterations.load();
   result.summary.solve_seconds = SecondsSince(start);
-  result.model_choice = plan.model_choice;
   internal::AssembleNormals(data, o, solutions, won, per_pixel, result);
+  SetRefinedFields(result, plan, previous);
+  return result;
+}
+
+void SetRefinedFields(NormalResult& result, const NormalPlan& plan, const NormalResult& previous) {
+  const NormalOptions& o = plan.options;
+  result.model = o.model;
+  result.shininess = o.shininess;
+  result.ambient_term = o.ambient_term;
+  result.code_offset = o.code_offset;
+  result.model_choice = plan.model_choice;
+  if (plan.requested_model == reflectance::Lobe::kLambert) return;
   result.ks = previous.ks;
   result.material_estimated = previous.material_estimated;
   result.specular_identifiable = previous.specular_identifiable;
   result.specular_note = previous.specular_note;
-  return result;
 }
 
 }  // namespace iphong::solve
