@@ -138,7 +138,10 @@ py::dict PlanDict(const solve::NormalPlan& plan) {
       py::arg("material_known") = o.material_known,
       py::arg("ambient_term") = ToList(o.ambient_term), py::arg("code_offset") = o.code_offset,
       py::arg("ks") = ToList(o.ks), py::arg("shininess") = o.shininess,
-      py::arg("known_albedo") = o.known_albedo ? py::object(ToList(*o.known_albedo)) : py::none());
+      py::arg("known_albedo") = o.known_albedo ? py::object(ToList(*o.known_albedo)) : py::none(),
+      py::arg("weigh_by_shading") = o.weigh_by_shading,
+      py::arg("shading_weights") = py::dict(py::arg("upper") = o.shading_weights.upper,
+                                            py::arg("weight") = o.shading_weights.weight));
   py::list scored;
   for (const solve::ModelCandidate& c : plan.model_choice.scored) scored.append(CandidateDict(c));
   return py::dict(
@@ -178,6 +181,10 @@ solve::NormalPlan PlanFrom(const py::object& value) {
     n.ks = ToRgb(o["ks"], "plan ks");
     n.shininess = o["shininess"].cast<double>();
     if (!o["known_albedo"].is_none()) n.known_albedo = ToRgb(o["known_albedo"], "plan kd");
+    n.weigh_by_shading = o["weigh_by_shading"].cast<bool>();
+    const py::dict w = o["shading_weights"].cast<py::dict>();
+    n.shading_weights.upper = w["upper"].cast<std::vector<double>>();
+    n.shading_weights.weight = w["weight"].cast<std::vector<double>>();
     plan.requested_model = reflectance::ParseLobe(d["requested_model"].cast<std::string>());
     plan.model_choice.chosen = CandidateFrom(d["chosen"].cast<py::dict>());
     for (const auto& c : d["scored"].cast<py::list>())

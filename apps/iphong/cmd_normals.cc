@@ -265,6 +265,14 @@ void RunNormals(const NormalsCommandOptions& o) {
                                {"code_offset", result.code_offset},
                                {"scores", scores}};
   }
+  if (const solve::ShadingMisfit& m = result.model_choice.shading; !m.weights.empty()) {
+    metrics["shading_weights"] = {{"band_upper_n_dot_l", m.weights.upper},
+                                  {"weight", m.weights.weight},
+                                  {"heldout_bias", m.bias},
+                                  {"heldout_spread", m.spread},
+                                  {"observations", m.observations},
+                                  {"rounds", m.rounds}};
+  }
   if (!ambiguity.pixels.empty()) {
     metrics["solver"] = "global (one or two images): data + smoothness + integrability + boundary";
   }
@@ -370,6 +378,23 @@ void RunNormals(const NormalsCommandOptions& o) {
         result.ks[2], result.specular_note.c_str());
   } else if (!result.specular_note.empty()) {
     Say(o.common, "%s\n", result.specular_note.c_str());
+  }
+  if (const solve::ShadingMisfit& m = result.model_choice.shading; !m.weights.empty()) {
+    // Only the bands the misfit's bias weighed down: most captures have none.
+    std::string bands;
+    for (std::size_t b = 0; b < m.weights.weight.size(); ++b) {
+      if (m.weights.weight[b] >= 0.95) continue;
+      char band[64];
+      std::snprintf(band, sizeof band, "%sN.L < %.2f x%.2f", bands.empty() ? "" : ", ",
+                    m.weights.upper[b], m.weights.weight[b]);
+      bands += band;
+    }
+    if (!bands.empty()) {
+      Say(o.common,
+          "Oblique observations weighed down where the model's held-out misfit is biased: %s "
+          "(%d rounds; metrics.json shading_weights)\n",
+          bands.c_str(), m.rounds);
+    }
   }
   if (result.summary.dark_pixels + result.summary.underdetermined_pixels > 0) {
     Say(o.common,

@@ -15,6 +15,7 @@
 #include "reflectance/phong.h"
 #include "solve/photometric_data.h"
 #include "solve/pixel_fit.h"
+#include "solve/shading_weights.h"
 
 namespace iphong::solve {
 
@@ -101,6 +102,9 @@ struct ModelChoice {
   // every model is also scored as if the images were truncated (code_offset half of it).
   double code_step = 0;
   std::string note;
+  // The fit's weights by N·L under the chosen model (shading_weights.h), measured by the plan
+  // (PlanNormals) after the choice; empty when not measured.
+  ShadingMisfit shading;
 };
 
 // Codes of 10 bits or fewer are tested for truncation: from 11 bits half a code is below 0.025 %

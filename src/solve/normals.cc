@@ -14,6 +14,7 @@
 #include "solve/light_tiles.h"
 #include "solve/pixel_fit.h"
 #include "solve/search.h"
+#include "solve/shading_weights.h"
 #include "solve/woodham.h"
 
 namespace iphong::solve {
@@ -35,6 +36,7 @@ PixelFitSettings FitSettingsOf(const NormalOptions& o) {
   s.rounds = o.irls_rounds;
   s.max_iterations = o.max_iterations;
   s.color_residuals = o.color_residuals;
+  s.shading_weights = o.shading_weights;
   return s;
 }
 
@@ -104,6 +106,7 @@ std::string NormalOptions::Validate() const {
   if (!ks.allFinite() || (ks.array() < 0).any() || !std::isfinite(shininess) || shininess < 0) {
     return "ks and shininess must be finite and >= 0";
   }
+  if (auto m = shading_weights.Validate(); !m.empty()) return m;
   return "";
 }
 
@@ -187,6 +190,17 @@ NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& optio
   o.shininess = plan.model_choice.chosen.shininess;
   o.ambient_term = plan.model_choice.chosen.ambient_term;
   o.code_offset = plan.model_choice.chosen.code_offset;
+  if (o.weigh_by_shading && !plan.model_choice.fold.empty()) {
+    const std::vector<std::size_t> pixels = SpreadIndices(sample.pixel_count(), o.model_sample);
+    std::vector<Vec3d> sub;
+    if (starts) {
+      for (std::size_t i : pixels) sub.push_back((*starts)[i]);
+    }
+    plan.model_choice.shading = EstimateShadingWeights(
+        sample, internal::PlanFitSettings(plan), pixels, plan.model_choice.fold,
+        o.search_candidates, o.threads, starts ? &sub : nullptr);
+    o.shading_weights = plan.model_choice.shading.weights;
+  }
   plan.model_seconds = SecondsSince(start);
   return plan;
 }

@@ -67,6 +67,11 @@ struct NormalOptions {
   // luminance, exact under the model and about twice as fast, a little less accurate on photos.
   bool color_residuals = true;
   int max_iterations = 10;  // per pixel and round
+  // Estimated coefficients: weight each observation by the object's held-out misfit at its N·L
+  // toward the terminator (shading_weights.h), measured by the plan on its sample. The weights
+  // the fits use are `shading_weights`, which the plan sets (empty: all alike).
+  bool weigh_by_shading = true;
+  ShadingWeights shading_weights;
 
   // Added to every nonzero channel of every observation before anything else (image units).
   // Images stored as integer codes were either rounded (code k stands for k ± ½ a step) or

@@ -111,6 +111,15 @@ struct PixelModel {
 
 }  // namespace
 
+std::string ShadingWeights::Validate() const {
+  if (upper.size() != weight.size()) return "shading weights: as many band edges as weights needed";
+  for (std::size_t b = 0; b < weight.size(); ++b) {
+    if (!(weight[b] > 0 && weight[b] <= 1)) return "shading weights: each weight in (0, 1]";
+    if (b > 0 && !(upper[b] >= upper[b - 1])) return "shading weights: band edges must ascend";
+  }
+  return "";
+}
+
 struct PixelFitter::State {
   const PhotometricData& data;
   PixelFitSettings settings;
@@ -166,6 +175,8 @@ struct PixelFitter::State {
                                                            residuals[3 * j + 2]));
       weights[j] = usable[j] *
                    internal::CensoredWeight(settings.censor_bright ? -std::abs(r) : r, threshold);
+      if (weights[j] != 0 && !settings.shading_weights.empty())
+        weights[j] *= settings.shading_weights.At(factors[j].diffuse.a);
     }
   }
 
@@ -355,6 +366,8 @@ double PixelFitter::ImageCost(const double* lights) const {
   }
   return cost / (t * t);
 }
+
+double PixelFitter::Diffuse(int j) const { return state_->values[j].diffuse; }
 
 double PixelFitter::Predicted(int j) const {
   const State& st = *state_;

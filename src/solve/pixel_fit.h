@@ -12,12 +12,28 @@
 
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "solve/internal.h"
 #include "solve/photometric_data.h"
 
 namespace iphong::solve {
+
+// Each observation's weight in the fit by the cosine N·L at which its light strikes the normal
+// at the fit's current point (shading_weights.h estimates them). Empty: every observation alike.
+struct ShadingWeights {
+  std::vector<double> upper;   // each band's upper edge in N·L, ascending (the last is ignored)
+  std::vector<double> weight;  // each band's weight, in (0, 1]
+  bool empty() const { return upper.empty(); }
+  double At(double n_dot_l) const {
+    for (std::size_t b = 0; b + 1 < upper.size(); ++b)
+      if (n_dot_l < upper[b]) return weight[b];
+    return weight.empty() ? 1.0 : weight.back();
+  }
+  // "" or what is wrong: sizes differ, edges not ascending, a weight outside (0, 1].
+  std::string Validate() const;
+};
 
 struct PixelFitSettings {
   reflectance::ModelOptions model;  // lobe (kLambert: no specular term)
@@ -43,6 +59,8 @@ struct PixelFitSettings {
   // Lambertian fit that leaves highlights out as it leaves shadows, for placing a surface
   // before the object's lobe is known (near/near.h).
   bool censor_bright = false;
+  // Multiplies each uncensored observation's weight, re-read at every censoring round.
+  ShadingWeights shading_weights;
 };
 
 class PixelFitter {
@@ -72,6 +90,8 @@ class PixelFitter {
   // After Fit: the luminance the fitted model predicts for light j (any light, fitted or not),
   // in the units of luminance().
   double Predicted(int j) const;
+  // After Fit: light j's diffuse factor (N·L, 0 when it does not reach the normal).
+  double Diffuse(int j) const;
   // After Fit: its censored cost in image units, Σ_j ρ(I_j − E_j·model_j, t)/t² over the
   // unsaturated observations (luminance; t = shadow_threshold × the pixel's recorded
   // brightness), a light that sends the point nothing predicting dark: the images' own misfit,

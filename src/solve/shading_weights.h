@@ -1,0 +1,52 @@
+// The fit's observation weights by the cosine N·L at which each light strikes the surface
+// (PixelFitSettings::shading_weights), from the object's own held-out misfit.
+//
+// Photometric stereo's models are least true toward the terminator, and the error there is
+// systematic, one-signed: real diffuse surfaces fall off faster than the cosine at grazing
+// incidence (Fresnel transmission, the surface's roughness shadowing itself), and a renderer that
+// shades a mesh with interpolated normals darkens the same band (its triangles shadow each other:
+// the rendered bunny of ../shared/data is 0.32 of the cosine at N·L 0.1–0.2, 0.79 at 0.3–0.4).
+// An unweighted fit pays for such a bias by tilting the normal away from the oblique lights;
+// noise, which averages out, does not tilt it. So the misfit is measured on the object: the
+// held-out residuals (each fold's lights predicted by a fit to the others, the model choice's
+// folds) of the lit, uncensored observations of a sample of pixels, in units of each pixel's
+// brightness, in bands of N·L that each hold a tenth of them. A band's weight is the inverse of
+// its expected squared error relative to noise alone, s² / (s² + μ²): μ its mean residual (the
+// bias), s the least robust spread of any band (the noise). Only the lower half of the bands is
+// weighted: the mechanisms above act toward the terminator, while a misfit near the mirror
+// direction is the lobe's to explain. The fits then use the weights and the misfit is measured
+// again, until the weights settle: a fit less bent by the biased band shows its bias more
+// plainly. Where the model holds (an exact render, a photograph whose residuals average to zero
+// in every band) the weights stay near 1.
+#pragma once
+
+#include <vector>
+
+#include "solve/photometric_data.h"
+#include "solve/pixel_fit.h"
+
+namespace iphong::solve {
+
+// Bands of N·L the misfit is measured in, each holding a tenth of the sample's observations.
+constexpr int kShadingBands = 10;
+// Rounds of measuring and refitting at most; they stop when no weight moves by kShadingSettle.
+constexpr int kShadingRounds = 20;
+constexpr double kShadingSettle = 0.02;
+
+struct ShadingMisfit {
+  ShadingWeights weights;      // empty: too few observations to measure (every weight 1)
+  std::vector<double> bias;    // each band's mean held-out residual, in pixel brightness
+  std::vector<double> spread;  // each band's robust spread (1.4826 × median |residual|)
+  std::size_t observations = 0;
+  int rounds = 0;
+};
+
+// The weights' fixed point on `pixels` (positions in data) over the folds `fold` (one per light),
+// with `fit`'s model; each pixel's folds fitted from the global search's normal on all its lights,
+// or from starts[i] when given. Empty weights with fewer than 20 observations per band.
+ShadingMisfit EstimateShadingWeights(const PhotometricData& data, const PixelFitSettings& fit,
+                                     const std::vector<std::size_t>& pixels,
+                                     const std::vector<int>& fold, int search_candidates,
+                                     int threads, const std::vector<Vec3d>* starts = nullptr);
+
+}  // namespace iphong::solve

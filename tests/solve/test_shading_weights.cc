@@ -1,0 +1,120 @@
+// The fit's weights by N·L (shading_weights.h) on spheres shaded by hand, independently of the
+// renderer: an exact cosine leaves every weight near 1 and the normals as they were; a shading
+// darkened toward the terminator, as a mesh renderer's self-shadowing darkens it, is weighed down
+// there and its normals come back closer.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "solve/normals.h"
+#include "solve/shading_weights.h"
+
+namespace iphong::solve {
+namespace {
+
+struct HandSphere {
+  PhotometricData data;
+  std::vector<Vec3d> normal;  // per masked pixel
+};
+
+// A sphere seen from above under 48 lights of a hemisphere cap (elevations 30°–90°), shading
+// ρ · s(N·L): s(c) = c, or with `terminator` (c − τ)/(1 − τ) above τ and 0 below.
+HandSphere Sphere(double terminator) {
+  const int size = 64, k = 48;
+  std::vector<Vec3d> lights;
+  const double golden = M_PI * (3 - std::sqrt(5.0));
+  for (int j = 0; j < k; ++j) {
+    const double z = 1 - 0.5 * (j + 0.5) / k, r = std::sqrt(1 - z * z);
+    lights.emplace_back(r * std::cos(golden * j), r * std::sin(golden * j), z);
+  }
+  std::vector<std::vector<float>> images(k, std::vector<float>(3 * size * size, 0.0f));
+  Mask mask(size, size, false);
+  HandSphere s;
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) {
+      const double u = (x + 0.5) / size * 2 - 1, v = 1 - (y + 0.5) / size * 2;
+      if (u * u + v * v > 0.9 * 0.9) continue;
+      const Vec3d n(u, v, std::sqrt(1 - u * u - v * v));
+      mask.inside[y * size + x] = 1;
+      for (int j = 0; j < k; ++j) {
+        const double c = n.dot(lights[j]);
+        const double shade =
+            terminator > 0 ? std::max(0.0, (c - terminator) / (1 - terminator)) : std::max(0.0, c);
+        for (int ch = 0; ch < 3; ++ch)
+          images[j][3 * (y * size + x) + ch] = static_cast<float>(0.6 * shade);
+      }
+    }
+  }
+  std::vector<const float*> pointers;
+  for (const auto& image : images) pointers.push_back(image.data());
+  s.data =
+      GatherObservations(pointers, size, size, mask, lights, std::vector<Vec3d>(k, Vec3d::Ones()));
+  for (int i : s.data.pixels) {
+    const double u = (i % size + 0.5) / size * 2 - 1, v = 1 - (i / size + 0.5) / size * 2;
+    s.normal.emplace_back(u, v, std::sqrt(1 - u * u - v * v));
+  }
+  return s;
+}
+
+double MeanErrorDeg(const NormalResult& r, const HandSphere& s) {
+  double sum = 0;
+  for (std::size_t i = 0; i < s.normal.size(); ++i) {
+    const std::size_t p = static_cast<std::size_t>(s.data.pixels[i]);
+    const Vec3d n(r.normals.pixels[3 * p], r.normals.pixels[3 * p + 1],
+                  r.normals.pixels[3 * p + 2]);
+    sum += std::acos(std::clamp(n.normalized().dot(s.normal[i]), -1.0, 1.0)) * 180 / M_PI;
+  }
+  return sum / s.normal.size();
+}
+
+TEST(ShadingWeights, BandsAndValidation) {
+  ShadingWeights w{{0.3, 0.6, 1.0}, {0.25, 0.5, 1.0}};
+  EXPECT_EQ(w.At(0.1), 0.25);
+  EXPECT_EQ(w.At(0.3), 0.5);  // an edge belongs to the band above it
+  EXPECT_EQ(w.At(0.99), 1.0);
+  EXPECT_EQ(w.At(1.5), 1.0);
+  EXPECT_EQ(w.Validate(), "");
+  EXPECT_NE((ShadingWeights{{0.3}, {0.5, 1.0}}).Validate(), "");
+  EXPECT_NE((ShadingWeights{{0.6, 0.3}, {0.5, 1.0}}).Validate(), "");
+  EXPECT_NE((ShadingWeights{{0.3, 1.0}, {0.0, 1.0}}).Validate(), "");
+  NormalOptions o;
+  o.shading_weights = ShadingWeights{{0.3, 1.0}, {1.5, 1.0}};
+  EXPECT_NE(o.Validate(), "");
+}
+
+TEST(ShadingWeights, AnExactCosineKeepsEveryWeightAndNormal) {
+  const HandSphere s = Sphere(0);
+  NormalOptions on, off;
+  off.weigh_by_shading = false;
+  const NormalResult weighted = EstimateNormals(s.data, on), plain = EstimateNormals(s.data, off);
+  const ShadingMisfit& m = weighted.model_choice.shading;
+  ASSERT_EQ(m.weights.weight.size(), static_cast<std::size_t>(kShadingBands));
+  for (double w : m.weights.weight) EXPECT_GT(w, 0.95);
+  EXPECT_TRUE(plain.model_choice.shading.weights.empty());
+  EXPECT_LT(MeanErrorDeg(weighted, s), 0.05);
+  EXPECT_LT(std::abs(MeanErrorDeg(weighted, s) - MeanErrorDeg(plain, s)), 0.01);
+}
+
+TEST(ShadingWeights, ATerminatorDarkeningIsWeighedDownAndTheNormalsImprove) {
+  const HandSphere s = Sphere(0.15);
+  NormalOptions on, off;
+  off.weigh_by_shading = false;
+  const NormalResult weighted = EstimateNormals(s.data, on), plain = EstimateNormals(s.data, off);
+  const ShadingMisfit& m = weighted.model_choice.shading;
+  ASSERT_EQ(m.weights.weight.size(), static_cast<std::size_t>(kShadingBands));
+  EXPECT_LT(m.weights.weight[0], 0.5);
+  EXPECT_LT(m.bias[0], 0);  // darker than predicted toward the terminator
+  for (int b = kShadingBands / 2; b < kShadingBands; ++b) EXPECT_EQ(m.weights.weight[b], 1.0);
+  const double with = MeanErrorDeg(weighted, s), without = MeanErrorDeg(plain, s);
+  std::printf("terminator 0.15: mean error %.3f deg weighted, %.3f unweighted, %d rounds\n", with,
+              without, m.rounds);
+  // Measured: 5.61° against 6.37° (the weights settle after 5 rounds; the rendered bunny of
+  // ../shared/data goes from 3.92° to 2.54°).
+  EXPECT_LT(with, 0.92 * without);
+}
+
+}  // namespace
+}  // namespace iphong::solve
