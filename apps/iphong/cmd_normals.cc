@@ -265,13 +265,8 @@ void RunNormals(const NormalsCommandOptions& o) {
                                {"code_offset", result.code_offset},
                                {"scores", scores}};
   }
-  if (const solve::ShadingMisfit& m = result.model_choice.shading; !m.weights.empty()) {
-    metrics["shading_weights"] = {{"band_upper_n_dot_l", m.weights.upper},
-                                  {"weight", m.weights.weight},
-                                  {"heldout_bias", m.bias},
-                                  {"heldout_spread", m.spread},
-                                  {"observations", m.observations},
-                                  {"rounds", m.rounds}};
+  if (auto w = ShadingWeightsJson(result.model_choice.shading); !w.is_null()) {
+    metrics["shading_weights"] = w;
   }
   if (!ambiguity.pixels.empty()) {
     metrics["solver"] = "global (one or two images): data + smoothness + integrability + boundary";
@@ -379,22 +374,8 @@ void RunNormals(const NormalsCommandOptions& o) {
   } else if (!result.specular_note.empty()) {
     Say(o.common, "%s\n", result.specular_note.c_str());
   }
-  if (const solve::ShadingMisfit& m = result.model_choice.shading; !m.weights.empty()) {
-    // Only the bands the misfit's bias weighed down: most captures have none.
-    std::string bands;
-    for (std::size_t b = 0; b < m.weights.weight.size(); ++b) {
-      if (m.weights.weight[b] >= 0.95) continue;
-      char band[64];
-      std::snprintf(band, sizeof band, "%sN.L < %.2f x%.2f", bands.empty() ? "" : ", ",
-                    m.weights.upper[b], m.weights.weight[b]);
-      bands += band;
-    }
-    if (!bands.empty()) {
-      Say(o.common,
-          "Oblique observations weighed down where the model's held-out misfit is biased: %s "
-          "(%d rounds; metrics.json shading_weights)\n",
-          bands.c_str(), m.rounds);
-    }
+  if (std::string line = ShadingWeightsLine(result.model_choice.shading); !line.empty()) {
+    Say(o.common, "%s\n", line.c_str());
   }
   if (result.summary.dark_pixels + result.summary.underdetermined_pixels > 0) {
     Say(o.common,
@@ -536,6 +517,9 @@ void AddNormalsCommand(CLI::App& app) {
   cmd->add_option("--irls-rounds", o->irls_rounds, "Censoring rounds of the local fit")
       ->check(CLI::Range(1, 20))
       ->capture_default_str();
+  cmd->add_flag("--uniform-weights", o->uniform_weights,
+                "Weigh every observation alike (by default a band of oblique lights whose held-out "
+                "misfit is biased is weighed down)");
   cmd->add_flag("--fast", o->fast,
                 "Fit normals to the luminance instead of all three channels (about 2x faster)");
   cmd->add_flag("--estimate-intensities", o->estimate_intensities,

@@ -263,6 +263,9 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
                                {"shininess", result.shininess},
                                {"pixels", result.model_choice.pixels}};
   }
+  if (auto w = ShadingWeightsJson(result.model_choice.shading); !w.is_null()) {
+    metrics["shading_weights"] = w;
+  }
   metrics["dark_pixels"] = result.summary.dark_pixels;
   metrics["underdetermined_pixels"] = result.summary.underdetermined_pixels;
   metrics["material"] = MaterialLabel(options, result);
@@ -289,6 +292,9 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
     Say(o.common, "Model %s, shininess %.1f; ks median [%.3f %.3f %.3f]\n",
         reflectance::LobeName(result.model).c_str(), result.shininess, result.ks[0], result.ks[1],
         result.ks[2]);
+  }
+  if (std::string line = ShadingWeightsLine(result.model_choice.shading); !line.empty()) {
+    Say(o.common, "%s\n", line.c_str());
   }
   if (result.summary.dark_pixels + result.summary.underdetermined_pixels > 0) {
     Say(o.common,

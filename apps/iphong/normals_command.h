@@ -26,6 +26,7 @@ struct NormalsCommandOptions {
   double shadow_threshold = solve::NormalOptions{}.shadow_threshold;
   int irls_rounds = solve::NormalOptions{}.irls_rounds;
   bool fast = false;
+  bool uniform_weights = false;  // no weights by N·L (NormalOptions::weigh_by_shading off)
   bool integrate = false;
   bool estimate_intensities = false;
   bool strict = false;     // a light file in another frame is an error, not a warning
@@ -59,6 +60,11 @@ nlohmann::json NormalsInputJson(const io::Dataset& d);
 // material.json as `iphong normals` writes an estimated material.
 nlohmann::json EstimatedMaterialJson(const solve::NormalResult& result);
 // metrics.json's "material": known, lambertian, estimated or lambertian (chosen).
+// metrics.json's shading_weights (null when none were measured) and the line saying which bands
+// of N·L were weighed down (empty when none was, below 0.95).
+nlohmann::json ShadingWeightsJson(const solve::ShadingMisfit& m);
+std::string ShadingWeightsLine(const solve::ShadingMisfit& m);
+
 std::string MaterialLabel(const solve::NormalOptions& options, const solve::NormalResult& result);
 
 // The light file's frame, checked on the normals it gave (integrate/frame_check.h: a file in

@@ -1,5 +1,8 @@
 // `iphong normals`: what it reads into the solver's options, and how it reports the capture and
 // the material (shared by the in-memory run, the bands and the near-light run).
+#include <cstdio>
+#include <string>
+
 #include <nlohmann/json.hpp>
 
 #include "io/dataset.h"
@@ -38,6 +41,31 @@ nlohmann::json EstimatedMaterialJson(const solve::NormalResult& result) {
           {"comment", "estimated by iphong normals: " + result.specular_note}};
 }
 
+nlohmann::json ShadingWeightsJson(const solve::ShadingMisfit& m) {
+  if (m.weights.empty()) return nullptr;
+  return {{"band_upper_n_dot_l", m.weights.upper},
+          {"weight", m.weights.weight},
+          {"heldout_bias", m.bias},
+          {"heldout_spread", m.spread},
+          {"observations", m.observations},
+          {"rounds", m.rounds}};
+}
+
+std::string ShadingWeightsLine(const solve::ShadingMisfit& m) {
+  std::string bands;
+  for (std::size_t b = 0; b < m.weights.weight.size(); ++b) {
+    if (m.weights.weight[b] >= 0.95) continue;
+    char band[64];
+    std::snprintf(band, sizeof band, "%sN.L < %.2f x%.2f", bands.empty() ? "" : ", ",
+                  m.weights.upper[b], m.weights.weight[b]);
+    bands += band;
+  }
+  if (bands.empty()) return "";
+  return "Oblique observations weighed down where the model's held-out misfit is biased: " + bands +
+         " (" + std::to_string(m.rounds) +
+         " rounds; metrics.json shading_weights; --uniform-weights: none)";
+}
+
 std::string MaterialLabel(const solve::NormalOptions& options, const solve::NormalResult& result) {
   return options.material_known                         ? "known (material.json)"
          : options.model == reflectance::Lobe::kLambert ? "lambertian"
@@ -53,6 +81,7 @@ solve::NormalOptions NormalOptionsFor(const NormalsCommandOptions& o, const io::
   options.shadow_threshold = o.shadow_threshold;
   options.irls_rounds = o.irls_rounds;
   options.color_residuals = !o.fast;
+  options.weigh_by_shading = !o.uniform_weights;
   if (d.material && !o.ignore_material) {
     options.model = d.material->model;
     options.material_known = true;
