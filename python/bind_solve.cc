@@ -391,6 +391,12 @@ depend on its own observations and the plan only, so any blocking gives the same
               py::arg("code_offset") = c.code_offset, py::arg("heldout_cost") = c.heldout_cost));
         }
         out["model_scores"] = scores;
+        if (const solve::ShadingMisfit& m = result.model_choice.shading; !m.weights.empty()) {
+          out["shading_weights"] =
+              py::dict(py::arg("band_upper_n_dot_l") = m.weights.upper,
+                       py::arg("weight") = m.weights.weight, py::arg("heldout_bias") = m.bias,
+                       py::arg("heldout_spread") = m.spread, py::arg("rounds") = m.rounds);
+        }
         if (!result.model_map.pixels.empty()) out["model_map"] = ToArray(result.model_map);
         if (!result.ambiguity_deg.pixels.empty()) {
           out["ambiguity_deg"] = ToArray(result.ambiguity_deg);
@@ -423,7 +429,10 @@ held-out prediction among Lambert, Phong and Blinn-Phong: model_scores lists eve
 with ka, ks, shininess, ambient (and model) when the coefficients are known, else ks is
 estimated per pixel; shadow_threshold: observations darker than the model by more than this
 fraction of the pixel's brightness count as shadowed. With the model chosen, model_map (H, W) says
-per pixel which won its own held-out test: 1 the specular model, 0 Lambert, -1 no normal.
+per pixel which won its own held-out test: 1 the specular model, 0 Lambert, -1 no normal, and
+shading_weights says how the observations were weighed by N·L (band_upper_n_dot_l, weight,
+heldout_bias, heldout_spread, rounds: a band toward the terminator whose held-out misfit is biased
+is weighed down).
 Returns normals (H, W, 3), albedo (H, W, 3), specular (H, W, 3: each pixel's ks; not for
 lambert), residual (H, W; -1 where no normal was found),
 the specular coefficients used or estimated, and a summary. With 1 or 2 images (material with

@@ -61,7 +61,7 @@ nlohmann::json NormalsInputJson(const io::Dataset& d);
 nlohmann::json EstimatedMaterialJson(const solve::NormalResult& result);
 // metrics.json's "material": known, lambertian, estimated or lambertian (chosen).
 // metrics.json's shading_weights (null when none were measured) and the line saying which bands
-// of N·L were weighed down (empty when none was, below 0.95).
+// of N·L were weighed below 0.9 (empty when none was).
 nlohmann::json ShadingWeightsJson(const solve::ShadingMisfit& m);
 std::string ShadingWeightsLine(const solve::ShadingMisfit& m);
 

@@ -1,0 +1,44 @@
+"""The weights by N·L from Python (src/solve/shading_weights.h), on spheres shaded here in numpy:
+an exact cosine leaves every band's weight near 1, a terminator darkened as a mesh renderer's
+self-shadowing darkens it is weighed down, and estimate_normals says so in shading_weights."""
+import numpy as np
+import pytest
+
+iphong = pytest.importorskip("iphong")
+
+
+def lights(count):
+    golden = np.pi * (3 - np.sqrt(5))
+    i = np.arange(count)
+    z = 1 - 0.5 * (i + 0.5) / count
+    r = np.sqrt(1 - z * z)
+    return np.stack([r * np.cos(golden * i), r * np.sin(golden * i), z], 1)
+
+
+def sphere(terminator, size=64, count=48):
+    c = (np.arange(size) + 0.5) / size * 2 - 1
+    x, y = np.meshgrid(c, -c)
+    inside = x * x + y * y < 0.81
+    z = np.sqrt(np.clip(1 - x * x - y * y, 0, None))
+    n = np.stack([x, y, z], -1)
+    L = lights(count)
+    cos = np.einsum("hwc,kc->khw", n, L)
+    shade = np.clip((cos - terminator) / (1 - terminator), 0, None)
+    images = np.repeat((0.6 * shade * inside)[..., None], 3, -1).astype(np.float32)
+    return images, L, inside, (n * inside[..., None]).astype(np.float32)
+
+
+def test_an_exact_cosine_keeps_every_weight():
+    images, L, mask, gt = sphere(0.0)
+    r = iphong.estimate_normals(images, L, None, mask, light_distance="inf")
+    w = r["shading_weights"]
+    assert len(w["weight"]) == 10 and min(w["weight"]) > 0.95
+    assert iphong.angular_error(r["normals"], gt, mask)["mean_angular_error_deg"] < 0.05
+
+
+def test_a_darkened_terminator_is_weighed_down():
+    images, L, mask, _ = sphere(0.15)
+    w = iphong.estimate_normals(images, L, None, mask, light_distance="inf")["shading_weights"]
+    assert w["heldout_bias"][0] < 0 and w["weight"][0] < 0.5
+    assert w["weight"][5:] == [1.0] * 5
+    assert list(w["band_upper_n_dot_l"]) == sorted(w["band_upper_n_dot_l"])
