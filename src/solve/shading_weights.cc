@@ -113,7 +113,8 @@ ShadingMisfit EstimateShadingWeights(const PhotometricData& data, const PixelFit
       m.bias.push_back(sum / static_cast<double>(to - from));
       m.weights.upper.push_back(band + 1 < kShadingBands ? seen[to].n_dot_l : 1.0);
     }
-    const double noise = std::max(*std::min_element(m.spread.begin(), m.spread.end()), 1e-12);
+    const double noise =
+        std::max(*std::min_element(m.spread.begin(), m.spread.end()), kShadingNoiseFloor);
     for (int band = 0; band < kShadingBands; ++band) {
       const double mu = band < kShadingBands / 2 ? m.bias[band] : 0.0;
       m.weights.weight.push_back(noise * noise / (noise * noise + mu * mu));

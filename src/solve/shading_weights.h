@@ -12,12 +12,12 @@
 // folds) of the lit, uncensored observations of a sample of pixels, in units of each pixel's
 // brightness, in bands of N·L that each hold a tenth of them. A band's weight is the inverse of
 // its expected squared error relative to noise alone, s² / (s² + μ²): μ its mean residual (the
-// bias), s the least robust spread of any band (the noise). Only the lower half of the bands is
-// weighted: the mechanisms above act toward the terminator, while a misfit near the mirror
-// direction is the lobe's to explain. The fits then use the weights and the misfit is measured
-// again, until the weights settle: a fit less bent by the biased band shows its bias more
-// plainly. Where the model holds (an exact render, a photograph whose residuals average to zero
-// in every band) the weights stay near 1.
+// bias), s the least robust spread of any band (the noise, at least kShadingNoiseFloor). Only the
+// lower half of the bands is weighted: the mechanisms above act toward the terminator, while a
+// misfit near the mirror direction is the lobe's to explain. The fits then use the weights and the
+// misfit is measured again, until the weights settle: a fit less bent by the biased band shows its
+// bias more plainly. Where the model holds (an exact render, a photograph whose residuals average
+// to zero in every band) the weights stay near 1.
 #pragma once
 
 #include <vector>
@@ -32,6 +32,11 @@ constexpr int kShadingBands = 10;
 // Rounds of measuring and refitting at most; they stop when no weight moves by kShadingSettle.
 constexpr int kShadingRounds = 20;
 constexpr double kShadingSettle = 0.02;
+// The noise s is taken as at least this fraction of the pixel's brightness, a photograph's noise
+// (kNegligibleLobe's 1 %): on an exact render the least spread is rounding, and a bias of a few
+// thousandths — a mesh's facets, a pixel's footprint — would otherwise weigh a band down to
+// nothing (a noise-free sphere under 12 lights went from 0.07° to 0.19°).
+constexpr double kShadingNoiseFloor = 0.01;
 
 struct ShadingMisfit {
   ShadingWeights weights;      // empty: too few observations to measure (every weight 1)
