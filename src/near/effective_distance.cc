@@ -217,6 +217,10 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
       Test& test = tests[diffuse];
       test.model = PlanModel(plan);
       test.settings.fit = solve::internal::FitSettingsOf(plan.options);
+      // The plan's weights by N·L were measured under distant lights: they weigh down the bands
+      // where distant lights misfit, which a finite distance may be what explains. Every candidate
+      // is fitted unweighted; the plan at the chosen distance measures its own.
+      test.settings.fit.shading_weights = {};
       test.settings.sample = o.normals.model_sample;
       test.settings.threads = o.normals.threads;
       test.settings.starts = &starts;
