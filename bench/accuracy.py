@@ -19,10 +19,16 @@ DATA = pathlib.Path(os.environ.get("IPHONG_DATA_DIR", ROOT.parent / "shared" / "
 
 
 def objects():
+    """(name, folder, is DiLiGenT): the photographs first, then captures other projects rendered
+    (rps-bunny-lambert), which the mean leaves out."""
     for group in ["diligent", "diligent-crop8"]:
         for folder in sorted((DATA / group).glob("*")):
             if (folder / "Normal_gt.mat").is_file():
-                yield f"{folder.name} ({'16-bit' if group == 'diligent' else '8-bit crop'})", folder
+                label = "16-bit" if group == "diligent" else "8-bit crop"
+                yield f"{folder.name} ({label})", folder, True
+    for folder in sorted(DATA.glob("*")):
+        if (folder / "Normal_gt.mat").is_file():
+            yield f"{folder.name} (rendered by another project)", folder, False
 
 
 def run(iphong, folder, flags):
@@ -50,15 +56,23 @@ def main():
     print("| object | lambert mean (median) | default mean (median) | lambert s | default s |")
     print("|---|---|---|---|---|")
     totals = [0.0, 0.0]
-    for name, folder in found:
+    rows = []
+    for name, folder, diligent in found:
         lm, lmed, ls = run(args.iphong, folder, common + ["--model", "lambert"])
         dm, dmed, ds = run(args.iphong, folder, common + args.extra)
-        totals[0] += lm
-        totals[1] += dm
-        print(f"| {name} | {lm:.2f} ({lmed:.2f}) | {dm:.2f} ({dmed:.2f}) | {ls:.1f} | {ds:.1f} |",
-              flush=True)
-    n = len(found)
-    print(f"| mean of {n} | {totals[0] / n:.2f} | {totals[1] / n:.2f} | | |")
+        if diligent:
+            totals[0] += lm
+            totals[1] += dm
+        row = f"| {name} | {lm:.2f} ({lmed:.2f}) | {dm:.2f} ({dmed:.2f}) | {ls:.1f} | {ds:.1f} |"
+        if diligent:
+            print(row, flush=True)
+        else:
+            rows.append(row)  # after the mean
+    n = sum(1 for *_, diligent in found if diligent)
+    if n:
+        print(f"| mean of the {n} DiLiGenT runs | {totals[0] / n:.2f} | {totals[1] / n:.2f} | | |")
+    for row in rows:
+        print(row)
 
 
 if __name__ == "__main__":
