@@ -59,12 +59,13 @@ nlohmann::json NormalsInputJson(const io::Dataset& d);
 
 // material.json as `iphong normals` writes an estimated material.
 nlohmann::json EstimatedMaterialJson(const solve::NormalResult& result);
-// metrics.json's "material": known, lambertian, estimated or lambertian (chosen).
 // metrics.json's shading_weights (null when none were measured) and the line saying which bands
-// of N·L were weighed below 0.9 (empty when none was).
+// of N·L were weighed below kShownWeight (empty when none was).
+constexpr double kShownWeight = 0.9;
 nlohmann::json ShadingWeightsJson(const solve::ShadingMisfit& m);
 std::string ShadingWeightsLine(const solve::ShadingMisfit& m);
 
+// metrics.json's "material": known, lambertian, estimated or lambertian (chosen).
 std::string MaterialLabel(const solve::NormalOptions& options, const solve::NormalResult& result);
 
 // The light file's frame, checked on the normals it gave (integrate/frame_check.h: a file in

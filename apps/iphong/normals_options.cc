@@ -54,7 +54,7 @@ nlohmann::json ShadingWeightsJson(const solve::ShadingMisfit& m) {
 std::string ShadingWeightsLine(const solve::ShadingMisfit& m) {
   std::string bands;
   for (std::size_t b = 0; b < m.weights.weight.size(); ++b) {
-    if (m.weights.weight[b] >= 0.9) continue;
+    if (m.weights.weight[b] >= kShownWeight) continue;
     char band[64];
     std::snprintf(band, sizeof band, "%sN.L < %.2f x%.2f", bands.empty() ? "" : ", ",
                   m.weights.upper[b], m.weights.weight[b]);

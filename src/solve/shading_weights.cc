@@ -14,7 +14,6 @@ namespace {
 struct Residual {
   double n_dot_l = 0;
   double value = 0;  // held-out residual over the pixel's brightness
-  bool operator<(const Residual& o) const { return n_dot_l < o.n_dot_l; }
 };
 
 // Each fold's lights predicted by the fit to the others, from `start`; the lit, uncensored ones

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <utility>
 #include <vector>
 
 #include "solve/normals.h"
@@ -70,6 +71,13 @@ double MeanErrorDeg(const NormalResult& r, const HandSphere& s) {
   return sum / s.normal.size();
 }
 
+// The sphere solved with the weights by N·L (first) and without (second).
+std::pair<NormalResult, NormalResult> WeightedAndPlain(const HandSphere& s) {
+  NormalOptions on, off;
+  off.weigh_by_shading = false;
+  return {EstimateNormals(s.data, on), EstimateNormals(s.data, off)};
+}
+
 TEST(ShadingWeights, BandsAndValidation) {
   ShadingWeights w{{0.3, 0.6, 1.0}, {0.25, 0.5, 1.0}};
   EXPECT_EQ(w.At(0.1), 0.25);
@@ -87,9 +95,7 @@ TEST(ShadingWeights, BandsAndValidation) {
 
 TEST(ShadingWeights, AnExactCosineKeepsEveryWeightAndNormal) {
   const HandSphere s = Sphere(0);
-  NormalOptions on, off;
-  off.weigh_by_shading = false;
-  const NormalResult weighted = EstimateNormals(s.data, on), plain = EstimateNormals(s.data, off);
+  const auto [weighted, plain] = WeightedAndPlain(s);
   const ShadingMisfit& m = weighted.model_choice.shading;
   ASSERT_EQ(m.weights.weight.size(), static_cast<std::size_t>(kShadingBands));
   for (double w : m.weights.weight) EXPECT_GT(w, 0.95);
@@ -100,9 +106,7 @@ TEST(ShadingWeights, AnExactCosineKeepsEveryWeightAndNormal) {
 
 TEST(ShadingWeights, ATerminatorDarkeningIsWeighedDownAndTheNormalsImprove) {
   const HandSphere s = Sphere(0.15);
-  NormalOptions on, off;
-  off.weigh_by_shading = false;
-  const NormalResult weighted = EstimateNormals(s.data, on), plain = EstimateNormals(s.data, off);
+  const auto [weighted, plain] = WeightedAndPlain(s);
   const ShadingMisfit& m = weighted.model_choice.shading;
   ASSERT_EQ(m.weights.weight.size(), static_cast<std::size_t>(kShadingBands));
   EXPECT_LT(m.weights.weight[0], 0.5);
