@@ -141,7 +141,8 @@ py::dict PlanDict(const solve::NormalPlan& plan) {
       py::arg("known_albedo") = o.known_albedo ? py::object(ToList(*o.known_albedo)) : py::none(),
       py::arg("weigh_by_shading") = o.weigh_by_shading,
       py::arg("shading_weights") = py::dict(py::arg("upper") = o.shading_weights.upper,
-                                            py::arg("weight") = o.shading_weights.weight));
+                                            py::arg("weight") = o.shading_weights.weight,
+                                            py::arg("offset") = o.shading_weights.offset));
   py::list scored;
   for (const solve::ModelCandidate& c : plan.model_choice.scored) scored.append(CandidateDict(c));
   return py::dict(
@@ -185,6 +186,8 @@ solve::NormalPlan PlanFrom(const py::object& value) {
     const py::dict w = o["shading_weights"].cast<py::dict>();
     n.shading_weights.upper = w["upper"].cast<std::vector<double>>();
     n.shading_weights.weight = w["weight"].cast<std::vector<double>>();
+    // Plans saved before offsets existed have none.
+    if (w.contains("offset")) n.shading_weights.offset = w["offset"].cast<std::vector<double>>();
     plan.requested_model = reflectance::ParseLobe(d["requested_model"].cast<std::string>());
     plan.model_choice.chosen = CandidateFrom(d["chosen"].cast<py::dict>());
     for (const auto& c : d["scored"].cast<py::list>())
@@ -392,10 +395,10 @@ depend on its own observations and the plan only, so any blocking gives the same
         }
         out["model_scores"] = scores;
         if (const solve::ShadingMisfit& m = result.model_choice.shading; !m.weights.empty()) {
-          out["shading_weights"] =
-              py::dict(py::arg("band_upper_n_dot_l") = m.weights.upper,
-                       py::arg("weight") = m.weights.weight, py::arg("heldout_bias") = m.bias,
-                       py::arg("heldout_spread") = m.spread, py::arg("rounds") = m.rounds);
+          out["shading_weights"] = py::dict(
+              py::arg("band_upper_n_dot_l") = m.weights.upper, py::arg("weight") = m.weights.weight,
+              py::arg("offset") = m.weights.offset, py::arg("heldout_bias") = m.bias,
+              py::arg("heldout_spread") = m.spread, py::arg("rounds") = m.rounds);
         }
         if (!result.model_map.pixels.empty()) out["model_map"] = ToArray(result.model_map);
         if (!result.ambiguity_deg.pixels.empty()) {
@@ -431,8 +434,8 @@ estimated per pixel; shadow_threshold: observations darker than the model by mor
 fraction of the pixel's brightness count as shadowed. With the model chosen, model_map (H, W) says
 per pixel which won its own held-out test: 1 the specular model, 0 Lambert, -1 no normal, and
 shading_weights says how the observations were weighed by N·L (band_upper_n_dot_l, weight,
-heldout_bias, heldout_spread, rounds: a band toward the terminator whose held-out misfit is biased
-is weighed down).
+offset, heldout_bias, heldout_spread, rounds: a band toward the terminator whose held-out misfit is
+biased is weighed down, and the bias the weights leave is taken off its observations: offset).
 Returns normals (H, W, 3), albedo (H, W, 3), specular (H, W, 3: each pixel's ks; not for
 lambert), residual (H, W; -1 where no normal was found),
 the specular coefficients used or estimated, and a summary. With 1 or 2 images (material with

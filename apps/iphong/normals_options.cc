@@ -45,6 +45,7 @@ nlohmann::json ShadingWeightsJson(const solve::ShadingMisfit& m) {
   if (m.weights.empty()) return nullptr;
   return {{"band_upper_n_dot_l", m.weights.upper},
           {"weight", m.weights.weight},
+          {"offset", m.weights.offset},
           {"heldout_bias", m.bias},
           {"heldout_spread", m.spread},
           {"observations", m.observations},
@@ -61,8 +62,9 @@ std::string ShadingWeightsLine(const solve::ShadingMisfit& m) {
     bands += band;
   }
   if (bands.empty()) return "";
-  return "Oblique observations weighed down where the model's held-out misfit is biased: " + bands +
-         " (" + std::to_string(m.rounds) +
+  return "Oblique observations weighed down where the model's held-out misfit is biased, and the "
+         "bias left taken off them: " +
+         bands + " (" + std::to_string(m.rounds) +
          " rounds; metrics.json shading_weights; --uniform-weights: none)";
 }
 

@@ -34,6 +34,18 @@ struct PixelModel {
   reflectance::ModelOptions model;
   const PixelLights* lights = nullptr;  // the pixel's L_j and V
   Vec3d n0, t1, t2;                     // chart: N = normalize(n0 + x0 t1 + x1 t2)
+  // The object's misfit by N·L (ShadingWeights::offset) taken off the observations, in each
+  // channel's share of the pixel's brightness; null: none.
+  const ShadingWeights* offset = nullptr;
+  double offset_scale[3] = {0, 0, 0};
+
+  // Observation j of channel c less the offset at the factors' N·L (a light behind the surface
+  // has none: the model predicts it dark).
+  double Y(const Factors& f, std::size_t j, int c) const {
+    const double v = y[j * channels + c];
+    if (!offset || !(f[j].diffuse.a > 0)) return v;
+    return v - offset->OffsetAt(f[j].diffuse.a) * offset_scale[c];
+  }
 
   void Center(const Vec3d& n) {
     n0 = n;
@@ -61,7 +73,7 @@ struct PixelModel {
                                                               const double* weight) const {
     return internal::EliminatedCoefficients<Jet2>(
         factors, channels, known_ks ? known_ks->data() : nullptr,
-        [&](std::size_t j, int c) { return y[j * channels + c]; },
+        [&](std::size_t j, int c) { return Y(factors, j, c); },
         [&](std::size_t j) { return weight[j]; }, ks_prior ? ks_prior->data() : nullptr,
         ks_prior_weight, ks_ridge);
   }
@@ -82,7 +94,7 @@ struct PixelModel {
       if (w == 0) continue;
       for (int c = 0; c < channels; ++c) {
         const Jet2 m = k[c].kd * factors[j].diffuse + k[c].ks * factors[j].specular;
-        const double r = y[j * channels + c] - m.a, v0 = w * m.v[0], v1 = w * m.v[1];
+        const double r = Y(factors, j, c) - m.a, v0 = w * m.v[0], v1 = w * m.v[1];
         cost += w * r * r;
         h00 += v0 * m.v[0];
         h01 += v0 * m.v[1];
@@ -102,8 +114,8 @@ struct PixelModel {
     const auto k = Coefficients(factors, weight);
     for (int j = 0; j < data->images; ++j) {
       for (int c = 0; c < channels; ++c) {
-        out[j * channels + c] = y[j * channels + c] - k[c].kd.a * factors[j].diffuse.a -
-                                k[c].ks.a * factors[j].specular.a;
+        out[j * channels + c] =
+            Y(factors, j, c) - k[c].kd.a * factors[j].diffuse.a - k[c].ks.a * factors[j].specular.a;
       }
     }
   }
@@ -113,6 +125,12 @@ struct PixelModel {
 
 std::string ShadingWeights::Validate() const {
   if (upper.size() != weight.size()) return "shading weights: as many band edges as weights needed";
+  if (!offset.empty() && offset.size() != weight.size()) {
+    return "shading weights: as many offsets as weights needed";
+  }
+  for (const double v : offset) {
+    if (!(std::abs(v) <= 1)) return "shading weights: each offset finite and within [-1, 1]";
+  }
   for (std::size_t b = 0; b < weight.size(); ++b) {
     if (!(weight[b] > 0 && weight[b] <= 1)) return "shading weights: each weight in (0, 1]";
     if (b > 0 && !(upper[b] >= upper[b - 1])) return "shading weights: band edges must ascend";
@@ -263,6 +281,23 @@ bool PixelFitter::Prepare(std::size_t p) {
   st.brightness = internal::BrightnessScale(st.bright);
   st.threshold = st.settings.shadow_threshold * st.brightness;
   st.model.y = st.model.channels == 1 ? st.y_lum.data() : st.y_rgb.data();
+  if (!st.settings.shading_weights.offset.empty()) {
+    // Each channel's share of the brightness: its sum over the usable observations against
+    // their luminance's.
+    st.model.offset = &st.settings.shading_weights;
+    double lum = 0;
+    Vec3d rgb = Vec3d::Zero();
+    for (int j = 0; j < k; ++j) {
+      if (st.usable[j] == 0) continue;
+      lum += st.y_lum[j];
+      rgb += Vec3d(st.y_rgb[3 * j], st.y_rgb[3 * j + 1], st.y_rgb[3 * j + 2]);
+    }
+    for (int c = 0; c < 3; ++c) {
+      st.model.offset_scale[c] = st.model.channels == 1 ? st.brightness
+                                 : lum > 0              ? st.brightness * rgb[c] / lum
+                                                        : 0.0;
+    }
+  }
   return true;
 }
 

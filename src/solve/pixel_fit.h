@@ -21,17 +21,24 @@
 namespace iphong::solve {
 
 // Each observation's weight in the fit by the cosine N·L at which its light strikes the normal
-// at the fit's current point (shading_weights.h estimates them). Empty: every observation alike.
+// at the fit's current point, and the object's measured misfit there subtracted from it
+// (shading_weights.h estimates both). Empty: every observation alike, nothing subtracted.
 struct ShadingWeights {
   std::vector<double> upper;   // each band's upper edge in N·L, ascending (the last is ignored)
   std::vector<double> weight;  // each band's weight, in (0, 1]
+  // Each band's offset in units of the pixel's brightness: the model predicts observation j as
+  // kd·d_j + ks·s_j + offset(d_j)·brightness (per channel, its share of the brightness). Empty: 0.
+  std::vector<double> offset;
   bool empty() const { return upper.empty(); }
-  double At(double n_dot_l) const {
-    for (std::size_t b = 0; b + 1 < upper.size(); ++b)
-      if (n_dot_l < upper[b]) return weight[b];
-    return weight.empty() ? 1.0 : weight.back();
+  std::size_t Band(double n_dot_l) const {
+    std::size_t b = 0;
+    while (b + 1 < upper.size() && !(n_dot_l < upper[b])) ++b;
+    return b;
   }
-  // "" or what is wrong: sizes differ, edges not ascending, a weight outside (0, 1].
+  double At(double n_dot_l) const { return weight.empty() ? 1.0 : weight[Band(n_dot_l)]; }
+  double OffsetAt(double n_dot_l) const { return offset.empty() ? 0.0 : offset[Band(n_dot_l)]; }
+  // "" or what is wrong: sizes differ, edges not ascending, a weight outside (0, 1], an offset
+  // not finite or beyond ±1.
   std::string Validate() const;
 };
 

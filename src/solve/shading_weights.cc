@@ -127,6 +127,15 @@ ShadingMisfit EstimateShadingWeights(const PhotometricData& data, const PixelFit
     fit.shading_weights = out.weights;
     if (moved < kShadingSettle) break;
   }
+  // What the settled weights still leave, the bias of the weighted bands, is taken off their
+  // observations: the weights keep a biased band from bending the fit, the offset keeps what
+  // remains of its pull from bending it one way.
+  if (!out.weights.empty()) {
+    for (int band = 0; band < kShadingBands; ++band) {
+      out.weights.offset.push_back(band < kShadingBands / 2 ? std::clamp(out.bias[band], -1.0, 1.0)
+                                                            : 0.0);
+    }
+  }
   return out;
 }
 

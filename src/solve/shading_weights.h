@@ -17,7 +17,9 @@
 // misfit near the mirror direction is the lobe's to explain. The fits then use the weights and the
 // misfit is measured again, until the weights settle: a fit less bent by the biased band shows its
 // bias more plainly. Where the model holds (an exact render, a photograph whose residuals average
-// to zero in every band) the weights stay near 1.
+// to zero in every band) the weights stay near 1. The bias the settled weights still measure in
+// the weighted bands is then taken off their observations (ShadingWeights::offset): measured on
+// held-out lights over the whole object, five numbers, it cannot follow one pixel's normal.
 #pragma once
 
 #include <vector>

@@ -41,4 +41,5 @@ def test_a_darkened_terminator_is_weighed_down():
     w = iphong.estimate_normals(images, L, None, mask, light_distance="inf")["shading_weights"]
     assert w["heldout_bias"][0] < 0 and w["weight"][0] < 0.5
     assert w["weight"][5:] == [1.0] * 5
+    assert w["offset"][0] == w["heldout_bias"][0] and w["offset"][5:] == [0.0] * 5
     assert list(w["band_upper_n_dot_l"]) == sorted(w["band_upper_n_dot_l"])
