@@ -247,6 +247,7 @@ void BindNear(py::module_& m) {
         e.normals = OptionsFrom(model, material, discard_dark, discard_bright, fast,
                                 shadow_threshold, threads);
         e.normals.plan_sample = plan_sample;
+        e.normals.weigh_by_shading = plan.options.weigh_by_shading;  // as the distant plan asked
         e.distance_px = EffectiveDistanceFrom(light_distance);
 
         near::DistanceCapture capture;

@@ -267,7 +267,8 @@ void BindSolve(py::module_& m) {
       [](const py::object& observations_in, const py::object& positions_in, int width, int height,
          const py::object& light_directions, const py::object& light_intensities,
          const py::object& model, const py::object& material, double discard_dark,
-         double discard_bright, bool fast, double shadow_threshold, int threads) {
+         double discard_bright, bool fast, double shadow_threshold, int threads,
+         bool weigh_by_shading) {
         const FloatStack obs = FloatStack::ensure(observations_in);
         if (!obs || obs.ndim() != 3 || obs.shape(2) != 3) {
           throw std::invalid_argument("observations: expected (n, K, 3) float");
@@ -293,8 +294,9 @@ void BindSolve(py::module_& m) {
         data.values.assign(obs.data(), obs.data() + n * k * 3);
         for (float v : data.values)
           if (!std::isfinite(v)) throw std::invalid_argument("observations: a non-finite value");
-        const solve::NormalOptions options = OptionsFrom(
-            model, material, discard_dark, discard_bright, fast, shadow_threshold, threads);
+        solve::NormalOptions options = OptionsFrom(model, material, discard_dark, discard_bright,
+                                                   fast, shadow_threshold, threads);
+        options.weigh_by_shading = weigh_by_shading;
         if (k < 3) throw std::invalid_argument("the plan needs at least 3 images");
         solve::NormalPlan plan;
         {
@@ -308,8 +310,9 @@ void BindSolve(py::module_& m) {
       py::arg("model") = py::none(), py::arg("material") = py::none(),
       py::arg("discard_dark") = 0.3, py::arg("discard_bright") = 0.1, py::arg("fast") = false,
       py::arg("shadow_threshold") = solve::NormalOptions{}.shadow_threshold, py::arg("threads") = 0,
+      py::kw_only(), py::arg("weigh_by_shading") = solve::NormalOptions{}.weigh_by_shading,
       R"doc(The whole-object decisions of estimate_normals (the model, its shininess, the ambient
-term), from the plan sample: observations (n, K, 3) of the pixels at `positions` (ascending
+term, the weights and offsets by N·L), from the plan sample: observations (n, K, 3) of the pixels at `positions` (ascending
 row-major indices in a width x height image; plan_sample_indices says which). Returns a plan, a
 dict of plain values for solve_normals_block. Arguments as estimate_normals.)doc");
 
@@ -346,7 +349,7 @@ depend on its own observations and the plan only, so any blocking gives the same
          double shadow_threshold, int threads, const py::object& max_memory_gb,
          const py::object& light_positions, const py::object& camera, const py::object& light_axes,
          const py::object& light_anisotropy, const py::object& distance,
-         const py::object& light_distance) {
+         const py::object& light_distance, bool weigh_by_shading) {
         const MemoryLimit memory = MemoryLimitFrom(max_memory_gb);
         const FloatStack images = ToImageStack(images_in);
         const std::size_t k = images.shape(0);
@@ -354,6 +357,7 @@ depend on its own observations and the plan only, so any blocking gives the same
             images, ToDirections(light_directions, k), Intensities(light_intensities, k), mask_in);
         solve::NormalOptions options = OptionsFrom(model, material, discard_dark, discard_bright,
                                                    fast, shadow_threshold, threads);
+        options.weigh_by_shading = weigh_by_shading;
         if (k < 3 && !options.known_albedo) {
           throw std::invalid_argument(
               "with 1 or 2 images pass material={'kd': ..., ...}: the coefficients must be "
@@ -423,6 +427,7 @@ depend on its own observations and the plan only, so any blocking gives the same
       py::arg("camera") = py::none(), py::arg("light_axes") = py::none(),
       py::arg("light_anisotropy") = py::none(), py::arg("distance") = py::none(),
       py::arg("light_distance") = "auto",
+      py::arg("weigh_by_shading") = solve::NormalOptions{}.weigh_by_shading,
       R"doc(Recover per-pixel normals and albedo (see `iphong normals`).
 
 images (K, H, W, 3) linear float; light_directions (K, 3) from the surface toward the light;
@@ -435,7 +440,9 @@ fraction of the pixel's brightness count as shadowed. With the model chosen, mod
 per pixel which won its own held-out test: 1 the specular model, 0 Lambert, -1 no normal, and
 shading_weights says how the observations were weighed by N·L (band_upper_n_dot_l, weight,
 offset, heldout_bias, heldout_spread, rounds: a band toward the terminator whose held-out misfit is
-biased is weighed down, and the bias the weights leave is taken off its observations: offset).
+biased is weighed down, and the bias the weights leave is taken off its observations: offset;
+weigh_by_shading=False, as `iphong normals --uniform-weights`, weighs every observation alike and
+takes nothing off).
 Returns normals (H, W, 3), albedo (H, W, 3), specular (H, W, 3: each pixel's ks; not for
 lambert), residual (H, W; -1 where no normal was found),
 the specular coefficients used or estimated, and a summary. With 1 or 2 images (material with

@@ -519,7 +519,7 @@ void AddNormalsCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--uniform-weights", o->uniform_weights,
                 "Weigh every observation alike (by default a band of oblique lights whose held-out "
-                "misfit is biased is weighed down)");
+                "misfit is biased is weighed down and the bias left taken off)");
   cmd->add_flag("--fast", o->fast,
                 "Fit normals to the luminance instead of all three channels (about 2x faster)");
   cmd->add_flag("--estimate-intensities", o->estimate_intensities,

@@ -79,7 +79,7 @@ def _effective_distance(images, mask_np, mask_da, masked, directions, intensitie
 def estimate_normals(images, light_directions, light_intensities=None, mask=None, model=None,
                      material=None, discard_dark=0.3, discard_bright=0.1, fast=False,
                      shadow_threshold=0.1, plan_sample=131072, threads_per_block=1, *,
-                     encoding=None, light_distance="auto"):
+                     encoding=None, light_distance="auto", weigh_by_shading=True):
     """iphong.estimate_normals on a dask.array (K, H, W, 3), chunked over H and W only.
 
     mask: (H, W) bool (numpy or dask) or None (every pixel). Returns a dict: normals, albedo,
@@ -94,7 +94,7 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     chosen on the same pixels as in memory, and each near pass maps the blocks again; the maps
     returned are then in memory, wrapped as dask arrays with the images' chunks, and equal to
     iphong.estimate_normals' bit for bit; r['effective_distance'] says what was chosen. With
-    'inf' everything stays lazy. Integer images (uint8, uint16) need encoding='linear' or 'srgb', as in
+    'inf' everything stays lazy. weigh_by_shading: as iphong.estimate_normals. Integer images (uint8, uint16) need encoding='linear' or 'srgb', as in
     iphong.estimate_normals (scaled to [0, 1], the sRGB curve undone; each block lazily); float
     images with encoding='srgb' are linearized.
     Raises ValueError for inconsistent shapes or chunks over K or the colour axis.
@@ -153,7 +153,8 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     else:
         sample = _np.zeros((0, k, 3), _np.float32)
     plan = _core.plan_normals(sample, positions, w, h, directions, intensities, model, material,
-                              discard_dark, discard_bright, fast, shadow_threshold)
+                              discard_dark, discard_bright, fast, shadow_threshold,
+                              weigh_by_shading=weigh_by_shading)
     plan["options"]["plan_sample"] = plan_sample
 
     mask_da = da.from_array(mask_np, chunks=images.chunks[1:3])

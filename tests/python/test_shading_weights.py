@@ -43,3 +43,24 @@ def test_a_darkened_terminator_is_weighed_down():
     assert w["weight"][5:] == [1.0] * 5
     assert w["offset"][0] == w["heldout_bias"][0] and w["offset"][5:] == [0.0] * 5
     assert list(w["band_upper_n_dot_l"]) == sorted(w["band_upper_n_dot_l"])
+
+
+def test_weigh_by_shading_false_weighs_every_observation_alike():
+    """weigh_by_shading=False is the CLI's --uniform-weights: no weights, no offsets, and on the
+    darkened terminator the normals the weights and offsets were measured to improve come out
+    worse; the plan dict and Dask carry the choice."""
+    images, L, mask, gt = sphere(0.15)
+    default = iphong.estimate_normals(images, L, None, mask, light_distance="inf")
+    uniform = iphong.estimate_normals(images, L, None, mask, light_distance="inf",
+                                      weigh_by_shading=False)
+    assert "shading_weights" in default and "shading_weights" not in uniform
+    error = {name: iphong.angular_error(r["normals"], gt, mask)["mean_angular_error_deg"]
+             for name, r in (("default", default), ("uniform", uniform))}
+    assert error["default"] < 0.9 * error["uniform"], error  # measured 4.25 against 6.37
+    da = pytest.importorskip("dask.array")
+    idask = pytest.importorskip("iphong.dask")
+    r = idask.estimate_normals(da.from_array(images, chunks=(-1, 32, 32, -1)), L, None, mask,
+                               light_distance="inf", weigh_by_shading=False)
+    assert r["plan"]["options"]["weigh_by_shading"] is False
+    assert r["plan"]["options"]["shading_weights"]["weight"] == []
+    np.testing.assert_array_equal(r["normals"].compute(), uniform["normals"])
