@@ -39,12 +39,20 @@ struct PixelModel {
   const ShadingWeights* offset = nullptr;
   double offset_scale[3] = {0, 0, 0};
 
-  // Observation j of channel c less the offset at the factors' N·L (a light behind the surface
-  // has none: the model predicts it dark).
-  double Y(const Factors& f, std::size_t j, int c) const {
-    const double v = y[j * channels + c];
-    if (!offset || !(f[j].diffuse.a > 0)) return v;
-    return v - offset->OffsetAt(f[j].diffuse.a) * offset_scale[c];
+  mutable std::vector<double> adjusted;  // the observations less their offsets (Observations)
+
+  // The observations (K × channels) the fit at these factors sees: y less each light's offset at
+  // the factors' N·L (a light behind the surface has none: the model predicts it dark); y itself
+  // without offsets. The band is looked up once per light, not per channel and use.
+  const double* Observations(const Factors& f) const {
+    if (!offset) return y;
+    adjusted.resize(f.size() * channels);
+    for (std::size_t j = 0; j < f.size(); ++j) {
+      const double o = f[j].diffuse.a > 0 ? offset->OffsetAt(f[j].diffuse.a) : 0.0;
+      for (int c = 0; c < channels; ++c)
+        adjusted[j * channels + c] = y[j * channels + c] - o * offset_scale[c];
+    }
+    return adjusted.data();
   }
 
   void Center(const Vec3d& n) {
@@ -69,11 +77,13 @@ struct PixelModel {
     }
   }
 
+  // `obs`: Observations(factors).
   std::array<internal::CoefficientPair<Jet2>, 3> Coefficients(const Factors& factors,
-                                                              const double* weight) const {
+                                                              const double* weight,
+                                                              const double* obs) const {
     return internal::EliminatedCoefficients<Jet2>(
         factors, channels, known_ks ? known_ks->data() : nullptr,
-        [&](std::size_t j, int c) { return Y(factors, j, c); },
+        [&](std::size_t j, int c) { return obs[j * channels + c]; },
         [&](std::size_t j) { return weight[j]; }, ks_prior ? ks_prior->data() : nullptr,
         ks_prior_weight, ks_ridge);
   }
@@ -87,14 +97,15 @@ struct PixelModel {
   };
   NormalEquations Reduce(const Factors& factors, const double* weight) const {
     NormalEquations e;
-    const auto k = Coefficients(factors, weight);
+    const double* obs = Observations(factors);
+    const auto k = Coefficients(factors, weight, obs);
     double cost = 0, h00 = 0, h01 = 0, h11 = 0, g0 = 0, g1 = 0;
     for (int j = 0; j < data->images; ++j) {
       const double w = weight[j];
       if (w == 0) continue;
       for (int c = 0; c < channels; ++c) {
         const Jet2 m = k[c].kd * factors[j].diffuse + k[c].ks * factors[j].specular;
-        const double r = Y(factors, j, c) - m.a, v0 = w * m.v[0], v1 = w * m.v[1];
+        const double r = obs[j * channels + c] - m.a, v0 = w * m.v[0], v1 = w * m.v[1];
         cost += w * r * r;
         h00 += v0 * m.v[0];
         h01 += v0 * m.v[1];
@@ -111,11 +122,12 @@ struct PixelModel {
 
   // Unweighted residuals at the factors' point, the coefficients eliminated with `weight`.
   void Residuals(const Factors& factors, const double* weight, double* out) const {
-    const auto k = Coefficients(factors, weight);
+    const double* obs = Observations(factors);
+    const auto k = Coefficients(factors, weight, obs);
     for (int j = 0; j < data->images; ++j) {
       for (int c = 0; c < channels; ++c) {
-        out[j * channels + c] =
-            Y(factors, j, c) - k[c].kd.a * factors[j].diffuse.a - k[c].ks.a * factors[j].specular.a;
+        out[j * channels + c] = obs[j * channels + c] - k[c].kd.a * factors[j].diffuse.a -
+                                k[c].ks.a * factors[j].specular.a;
       }
     }
   }

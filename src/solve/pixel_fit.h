@@ -10,6 +10,7 @@
 // camera frame, V = (0, 0, 1).
 #pragma once
 
+#include <algorithm>
 #include <memory>
 #include <optional>
 #include <string>
@@ -30,9 +31,12 @@ struct ShadingWeights {
   // kd·d_j + ks·s_j + offset(d_j)·brightness (per channel, its share of the brightness). Empty: 0.
   std::vector<double> offset;
   bool empty() const { return upper.empty(); }
+  // The first band whose upper edge lies above n_dot_l; the last beyond every edge. The edges
+  // ascend, so that is the count of edges at or below it: no data-dependent branch in the fit's
+  // inner loop.
   std::size_t Band(double n_dot_l) const {
     std::size_t b = 0;
-    while (b + 1 < upper.size() && !(n_dot_l < upper[b])) ++b;
+    for (std::size_t e = 0; e + 1 < upper.size(); ++e) b += !(n_dot_l < upper[e]);
     return b;
   }
   double At(double n_dot_l) const { return weight.empty() ? 1.0 : weight[Band(n_dot_l)]; }
