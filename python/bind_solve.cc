@@ -312,8 +312,9 @@ void BindSolve(py::module_& m) {
       py::arg("shadow_threshold") = solve::NormalOptions{}.shadow_threshold, py::arg("threads") = 0,
       py::kw_only(), py::arg("weigh_by_shading") = solve::NormalOptions{}.weigh_by_shading,
       R"doc(The whole-object decisions of estimate_normals (the model, its shininess, the ambient
-term, the weights and offsets by N·L), from the plan sample: observations (n, K, 3) of the pixels at `positions` (ascending
-row-major indices in a width x height image; plan_sample_indices says which). Returns a plan, a
+term, the weights and offsets by N·L), from the plan sample: observations (n, K, 3) of the
+pixels at `positions` (ascending row-major indices in a width x height image;
+plan_sample_indices says which). Returns a plan, a
 dict of plain values for solve_normals_block. Arguments as estimate_normals.)doc");
 
   m.def(

@@ -94,9 +94,10 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     chosen on the same pixels as in memory, and each near pass maps the blocks again; the maps
     returned are then in memory, wrapped as dask arrays with the images' chunks, and equal to
     iphong.estimate_normals' bit for bit; r['effective_distance'] says what was chosen. With
-    'inf' everything stays lazy. weigh_by_shading: as iphong.estimate_normals. Integer images (uint8, uint16) need encoding='linear' or 'srgb', as in
-    iphong.estimate_normals (scaled to [0, 1], the sRGB curve undone; each block lazily); float
-    images with encoding='srgb' are linearized.
+    'inf' everything stays lazy. weigh_by_shading: as iphong.estimate_normals. Integer images
+    (uint8, uint16) need encoding='linear' or 'srgb', as in iphong.estimate_normals (scaled to
+    [0, 1], the sRGB curve undone; each block lazily); float images with encoding='srgb' are
+    linearized.
     Raises ValueError for inconsistent shapes or chunks over K or the colour axis.
     """
     import dask

@@ -180,6 +180,7 @@ struct PixelFitter::State {
     }
     model.shininess = s.shininess;
     model.ks_ridge = s.ks_ridge;
+    if (!settings.shading_weights.offset.empty()) model.offset = &settings.shading_weights;
     model.model = s.model;
     // A known zero ks is no specular term: the Lambertian model, not a zero lobe.
     if (s.known_ks && s.known_ks->isZero()) model.model.lobe = reflectance::Lobe::kLambert;
@@ -293,10 +294,9 @@ bool PixelFitter::Prepare(std::size_t p) {
   st.brightness = internal::BrightnessScale(st.bright);
   st.threshold = st.settings.shadow_threshold * st.brightness;
   st.model.y = st.model.channels == 1 ? st.y_lum.data() : st.y_rgb.data();
-  if (!st.settings.shading_weights.offset.empty()) {
+  if (st.model.offset) {
     // Each channel's share of the brightness: its sum over the usable observations against
     // their luminance's.
-    st.model.offset = &st.settings.shading_weights;
     double lum = 0;
     Vec3d rgb = Vec3d::Zero();
     for (int j = 0; j < k; ++j) {
@@ -346,6 +346,8 @@ void PixelFitter::Fit(internal::PixelSolution& s, const double* lights) {
   s.normal = normal;
   // The RGB coefficients with the final weights, and the RMS difference between the usable
   // observations and the model (its factors combined by reflectance::CombineFactors, + Ia⊙ka).
+  // Both of the observations as recorded, without the offsets: the offsets place the normal;
+  // the coefficients are the Phong model's at it, what a render from them reproduces.
   std::vector<reflectance::LightFactors<double>>& f = st.values;
   f.resize(k);
   for (int j = 0; j < k; ++j) f[j] = {st.factors[j].diffuse.a, st.factors[j].specular.a};

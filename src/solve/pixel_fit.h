@@ -10,7 +10,6 @@
 // camera frame, V = (0, 0, 1).
 #pragma once
 
-#include <algorithm>
 #include <memory>
 #include <optional>
 #include <string>

@@ -11,6 +11,12 @@
 namespace iphong::solve {
 namespace {
 
+// The bias a band is weighed and offset by: its own in the lower half of the bands, toward the
+// terminator; none above, where a misfit near the mirror direction is the lobe's to explain.
+double TerminatorBias(const std::vector<double>& bias, int band) {
+  return band < kShadingBands / 2 ? bias[band] : 0.0;
+}
+
 struct Residual {
   double n_dot_l = 0;
   double value = 0;  // held-out residual over the pixel's brightness
@@ -115,7 +121,7 @@ ShadingMisfit EstimateShadingWeights(const PhotometricData& data, const PixelFit
     const double noise =
         std::max(*std::min_element(m.spread.begin(), m.spread.end()), kShadingNoiseFloor);
     for (int band = 0; band < kShadingBands; ++band) {
-      const double mu = band < kShadingBands / 2 ? m.bias[band] : 0.0;
+      const double mu = TerminatorBias(m.bias, band);
       m.weights.weight.push_back(noise * noise / (noise * noise + mu * mu));
     }
     double moved = 0;
@@ -132,8 +138,7 @@ ShadingMisfit EstimateShadingWeights(const PhotometricData& data, const PixelFit
   // remains of its pull from bending it one way.
   if (!out.weights.empty()) {
     for (int band = 0; band < kShadingBands; ++band) {
-      out.weights.offset.push_back(band < kShadingBands / 2 ? std::clamp(out.bias[band], -1.0, 1.0)
-                                                            : 0.0);
+      out.weights.offset.push_back(std::clamp(TerminatorBias(out.bias, band), -1.0, 1.0));
     }
   }
   return out;

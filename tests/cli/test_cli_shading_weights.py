@@ -1,8 +1,9 @@
 """The fit's weights by N·L (src/solve/shading_weights.h) on the command line, on Matsushita's
 rendered bunny (../shared/data/rps-bunny-lambert; skipped when absent): its renderer darkens the
 band toward the terminator, the default weighs that band down, takes the bias the weights leave
-off the observations (offset) and says so, and its normals then beat its own --model lambert run; --uniform-weights turns the weights off (the figures the
-release before gave), and metrics.json carries the bands in the in-memory run and in bands."""
+off the observations (offset) and says so, and its normals then beat its own --model lambert
+run; --uniform-weights turns weights and offsets off (the figures of the release before them),
+and metrics.json carries the bands in the in-memory run and in bands."""
 import json
 import os
 import pathlib
