@@ -400,10 +400,11 @@ depend on its own observations and the plan only, so any blocking gives the same
         }
         out["model_scores"] = scores;
         if (const solve::ShadingMisfit& m = result.model_choice.shading; !m.weights.empty()) {
-          out["shading_weights"] = py::dict(
-              py::arg("band_upper_n_dot_l") = m.weights.upper, py::arg("weight") = m.weights.weight,
-              py::arg("offset") = m.weights.offset, py::arg("heldout_bias") = m.bias,
-              py::arg("heldout_spread") = m.spread, py::arg("rounds") = m.rounds);
+          out["shading_weights"] =
+              py::dict(py::arg("band_upper_n_dot_l") = m.weights.upper,
+                       py::arg("weight") = m.weights.weight, py::arg("offset") = m.weights.offset,
+                       py::arg("heldout_bias") = m.bias, py::arg("heldout_spread") = m.spread,
+                       py::arg("rounds") = m.rounds, py::arg("offset_rounds") = m.offset_rounds);
         }
         if (!result.model_map.pixels.empty()) out["model_map"] = ToArray(result.model_map);
         if (!result.ambiguity_deg.pixels.empty()) {
@@ -440,8 +441,9 @@ estimated per pixel; shadow_threshold: observations darker than the model by mor
 fraction of the pixel's brightness count as shadowed. With the model chosen, model_map (H, W) says
 per pixel which won its own held-out test: 1 the specular model, 0 Lambert, -1 no normal, and
 shading_weights says how the observations were weighed by N·L (band_upper_n_dot_l, weight,
-offset, heldout_bias, heldout_spread, rounds: a band toward the terminator whose held-out misfit is
-biased is weighed down, and the bias the weights leave is taken off its observations: offset;
+offset, heldout_bias, heldout_spread, rounds, offset_rounds: a band toward the terminator whose
+held-out misfit is biased is weighed down, and the bias the weights leave is taken off its
+observations: offset, iterated until it is the bias measured at the normals it places;
 weigh_by_shading=False, as `iphong normals --uniform-weights`, weighs every observation alike and
 takes nothing off).
 Returns normals (H, W, 3), albedo (H, W, 3), specular (H, W, 3: each pixel's ks; not for

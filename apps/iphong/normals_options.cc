@@ -49,7 +49,8 @@ nlohmann::json ShadingWeightsJson(const solve::ShadingMisfit& m) {
           {"heldout_bias", m.bias},
           {"heldout_spread", m.spread},
           {"observations", m.observations},
-          {"rounds", m.rounds}};
+          {"rounds", m.rounds},
+          {"offset_rounds", m.offset_rounds}};
 }
 
 std::string ShadingWeightsLine(const solve::ShadingMisfit& m) {

@@ -14,6 +14,7 @@
 #include "solve/assemble.h"
 #include "solve/model_choice.h"
 #include "solve/pixel_fit.h"
+#include "solve/shading_weights.h"
 
 namespace iphong::near {
 
@@ -258,6 +259,20 @@ class Loop {
             } else {
               fit = lambert_fit_;
             }
+            refines = 0;
+            continue;
+          }
+          // The weights and offsets by N·L, though, are the misfit the first surface's lights
+          // left: measured again on the settled surface, they are taken when they moved (an exact
+          // Lambertian dome: the first surface's bands were biased by up to 0.4 % of the
+          // brightness, which the offsets' fixed point made a 0.2° error).
+          if (!solve::SameShading(plan->options.shading_weights, again.options.shading_weights)) {
+            plan->options.shading_weights = again.options.shading_weights;
+            plan->model_choice.shading = again.model_choice.shading;
+            if (plan->options.model != reflectance::Lobe::kLambert) {
+              fit = solve::internal::PlanFitSettings(*plan);
+            }
+            Say("weights by N.L measured again on the settled surface");
             refines = 0;
             continue;
           }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <mutex>
 
 #include "core/parallel.h"
@@ -79,10 +80,11 @@ ShadingMisfit EstimateShadingWeights(const PhotometricData& data, const PixelFit
           }
         });
   }
-  std::vector<Residual> seen;
-  std::mutex merge;
-  for (int round = 0; round < kShadingRounds; ++round) {
-    seen.clear();
+  // The sample's held-out residuals under `fit`, sorted by N·L: the same observations in the same
+  // order whatever the threads' interleaving.
+  const auto measure = [&] {
+    std::vector<Residual> seen;
+    std::mutex merge;
     ParallelFor(0, pixels.size(), 16, threads, [&](std::size_t b, std::size_t e) {
       PixelFitter fitter(data, fit);
       std::vector<double> training(data.images);
@@ -94,11 +96,14 @@ ShadingMisfit EstimateShadingWeights(const PhotometricData& data, const PixelFit
       const std::lock_guard lock(merge);
       seen.insert(seen.end(), local.begin(), local.end());
     });
-    if (seen.size() < 20 * static_cast<std::size_t>(kShadingBands)) return ShadingMisfit{};
-    // The same observations in the same order whatever the threads' interleaving.
     std::sort(seen.begin(), seen.end(), [](const Residual& a, const Residual& b) {
       return a.n_dot_l != b.n_dot_l ? a.n_dot_l < b.n_dot_l : a.value < b.value;
     });
+    return seen;
+  };
+  for (int round = 0; round < kShadingRounds; ++round) {
+    const std::vector<Residual> seen = measure();
+    if (seen.size() < 20 * static_cast<std::size_t>(kShadingBands)) return ShadingMisfit{};
     ShadingMisfit m;
     m.observations = seen.size();
     m.rounds = round + 1;
@@ -133,15 +138,60 @@ ShadingMisfit EstimateShadingWeights(const PhotometricData& data, const PixelFit
     fit.shading_weights = out.weights;
     if (moved < kShadingSettle) break;
   }
+  if (out.weights.empty()) return out;
   // What the settled weights still leave, the bias of the weighted bands, is taken off their
   // observations: the weights keep a biased band from bending the fit, the offset keeps what
-  // remains of its pull from bending it one way.
-  if (!out.weights.empty()) {
-    for (int band = 0; band < kShadingBands; ++band) {
-      out.weights.offset.push_back(std::clamp(TerminatorBias(out.bias, band), -1.0, 1.0));
+  // remains of its pull from bending it one way. The bias measured at the weighted fit's normals
+  // is short of the band's own, since those normals absorbed part of it; so the offsets are
+  // iterated: each round's offsets are the Phong model's held-out bias at the normals the previous
+  // round's offsets placed (not added to them), in the weights' bands, weights held. If the
+  // normals absorb a fraction g < 1 of the bias left unexplained, that map is a contraction of
+  // ratio g whose fixed point is the band's bias itself.
+  std::vector<double> offset(kShadingBands, 0.0);
+  for (int band = 0; band < kShadingBands; ++band) {
+    offset[band] = std::clamp(TerminatorBias(out.bias, band), -1.0, 1.0);
+  }
+  out.weights.offset = offset;
+  out.offset_rounds = 1;
+  double last_move = std::numeric_limits<double>::infinity();
+  for (int round = 1; round < kOffsetRounds; ++round) {
+    fit.shading_weights = out.weights;
+    const std::vector<Residual> seen = measure();
+    std::vector<double> sum(kShadingBands, 0.0);
+    std::vector<std::size_t> count(kShadingBands, 0);
+    for (const Residual& r : seen) {
+      const std::size_t band = out.weights.Band(r.n_dot_l);
+      sum[band] += r.value;
+      ++count[band];
     }
+    double moved = 0;
+    for (int band = 0; band < kShadingBands; ++band) {
+      // A band the normals moved nearly every observation out of keeps its offset.
+      if (count[band] < 20) continue;
+      offset[band] =
+          std::clamp(TerminatorBias(sum, band) / static_cast<double>(count[band]), -1.0, 1.0);
+      moved = std::max(moved, std::abs(offset[band] - out.weights.offset[band]));
+    }
+    // A step no shorter than the last: the map is not contracting here (or the steps are down to
+    // the sample's jitter); the last round's offsets are kept.
+    if (moved >= last_move) break;
+    last_move = moved;
+    out.weights.offset = offset;
+    out.offset_rounds = round + 1;
+    if (moved < kOffsetSettle) break;
   }
   return out;
+}
+
+bool SameShading(const ShadingWeights& a, const ShadingWeights& b) {
+  if (a.upper.size() != b.upper.size() || a.offset.size() != b.offset.size()) return false;
+  for (std::size_t i = 0; i < a.upper.size(); ++i) {
+    if (std::abs(a.weight[i] - b.weight[i]) >= kShadingSettle) return false;
+  }
+  for (std::size_t i = 0; i < a.offset.size(); ++i) {
+    if (std::abs(a.offset[i] - b.offset[i]) >= kOffsetSettle) return false;
+  }
+  return true;
 }
 
 }  // namespace iphong::solve

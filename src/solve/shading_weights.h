@@ -19,7 +19,9 @@
 // bias more plainly. Where the model holds (an exact render, a photograph whose residuals average
 // to zero in every band) the weights stay near 1. The bias the settled weights still measure in
 // the weighted bands is then taken off their observations (ShadingWeights::offset): measured on
-// held-out lights over the whole object, five numbers, it cannot follow one pixel's normal.
+// held-out lights over the whole object, five numbers, it cannot follow one pixel's normal. That
+// bias is measured at normals which absorbed part of it, so the offsets are iterated to the fixed
+// point where they equal the bias measured at the normals they place (shading_weights.cc).
 #pragma once
 
 #include <vector>
@@ -39,13 +41,18 @@ constexpr double kShadingSettle = 0.02;
 // thousandths — a mesh's facets, a pixel's footprint — would otherwise weigh a band down to
 // nothing (a noise-free sphere under 12 lights went from 0.07° to 0.19°).
 constexpr double kShadingNoiseFloor = 0.01;
+// Rounds of the offsets' fixed point at most (the first is the settled weights' bias); they stop
+// when no offset moves by kOffsetSettle, a tenth of kShadingNoiseFloor.
+constexpr int kOffsetRounds = 12;
+constexpr double kOffsetSettle = 0.001;
 
 struct ShadingMisfit {
   ShadingWeights weights;      // empty: too few observations to measure (every weight 1)
   std::vector<double> bias;    // each band's mean held-out residual, in pixel brightness
   std::vector<double> spread;  // each band's robust spread (1.4826 × median |residual|)
   std::size_t observations = 0;
-  int rounds = 0;
+  int rounds = 0;         // of the weights
+  int offset_rounds = 0;  // of the offsets' fixed point
 };
 
 // The weights' fixed point on `pixels` (positions in data) over the folds `fold` (one per light),
@@ -55,5 +62,9 @@ ShadingMisfit EstimateShadingWeights(const PhotometricData& data, const PixelFit
                                      const std::vector<std::size_t>& pixels,
                                      const std::vector<int>& fold, int search_candidates,
                                      int threads, const std::vector<Vec3d>* starts = nullptr);
+
+// Whether b equals a within the settling tolerances: as many bands, no weight apart by
+// kShadingSettle, no offset by kOffsetSettle (band edges are not compared: they follow the sample).
+bool SameShading(const ShadingWeights& a, const ShadingWeights& b);
 
 }  // namespace iphong::solve

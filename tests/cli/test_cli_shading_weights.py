@@ -37,16 +37,18 @@ def test_the_bunny_beats_its_lambert_run_with_the_terminator_weighed_down(tmp_pa
     # The lowest band is darker than predicted and weighed down; the upper half is left alone.
     assert w["heldout_bias"][0] < 0 and w["weight"][0] < 0.2
     assert all(x == 1.0 for x in w["weight"][5:])
-    # What the weights leave of the bias is taken off the weighted bands only.
-    assert w["offset"][:5] == w["heldout_bias"][:5] and w["offset"][5:] == [0.0] * 5
+    # What the weights leave of the bias is taken off the weighted bands only, at the offsets'
+    # fixed point: beyond the first measurement, which the normals had absorbed part of.
+    assert all(o < b < 0 for o, b in zip(w["offset"][:5], w["heldout_bias"][:5])), w
+    assert w["offset"][5:] == [0.0] * 5 and 2 <= w["offset_rounds"] < 12
     assert "Oblique observations weighed down" in said
     assert "shading_weights" not in uniform and "Oblique" not in said_uniform
     mean = {k: m["mean_angular_error_deg"] for k, m in
             (("weighted", weighted), ("uniform", uniform), ("lambert", lambert))}
-    # Measured: 1.79 (2.56 with the weights alone) against 3.92 unweighted and 2.65 for
-    # --model lambert.
+    # Measured: 1.33 (1.79 with one round of offsets, 2.56 with the weights alone) against 3.92
+    # unweighted and 2.65 for --model lambert.
     assert mean["weighted"] < mean["lambert"] < mean["uniform"], mean
-    assert mean["weighted"] < 2.0, mean
+    assert mean["weighted"] < 1.5, mean
 
 
 def test_bands_record_the_same_weights(tmp_path):

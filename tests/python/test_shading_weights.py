@@ -41,7 +41,10 @@ def test_a_darkened_terminator_is_weighed_down():
     w = iphong.estimate_normals(images, L, None, mask, light_distance="inf")["shading_weights"]
     assert w["heldout_bias"][0] < 0 and w["weight"][0] < 0.5
     assert w["weight"][5:] == [1.0] * 5
-    assert w["offset"][0] == w["heldout_bias"][0] and w["offset"][5:] == [0.0] * 5
+    # The offsets' fixed point lies beyond the first measurement, which the normals had absorbed
+    # part of; none in the upper half.
+    assert w["offset"][0] < w["heldout_bias"][0] and w["offset"][5:] == [0.0] * 5
+    assert 2 <= w["offset_rounds"] < 12
     assert list(w["band_upper_n_dot_l"]) == sorted(w["band_upper_n_dot_l"])
 
 
@@ -56,7 +59,7 @@ def test_weigh_by_shading_false_weighs_every_observation_alike():
     assert "shading_weights" in default and "shading_weights" not in uniform
     error = {name: iphong.angular_error(r["normals"], gt, mask)["mean_angular_error_deg"]
              for name, r in (("default", default), ("uniform", uniform))}
-    assert error["default"] < 0.9 * error["uniform"], error  # measured 4.25 against 6.37
+    assert error["default"] < 0.9 * error["uniform"], error  # measured 2.85 against 6.37
     da = pytest.importorskip("dask.array")
     idask = pytest.importorskip("iphong.dask")
     r = idask.estimate_normals(da.from_array(images, chunks=(-1, 32, 32, -1)), L, None, mask,
