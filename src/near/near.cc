@@ -262,10 +262,10 @@ class Loop {
             refines = 0;
             continue;
           }
-          // The weights and offsets by N·L, though, are the misfit the first surface's lights
-          // left: measured again on the settled surface, they are taken when they moved (an exact
-          // Lambertian dome: the first surface's bands were biased by up to 0.4 % of the
-          // brightness, which the offsets' fixed point made a 0.2° error).
+          // The weights and offsets by N·L, though, measured the misfit of the first surface's
+          // lights as well as the object's: measured again on the settled surface, they are taken
+          // when they moved (an exact Lambertian dome's bands are biased on the first surface,
+          // unbiased on the settled one).
           if (!solve::SameShading(plan->options.shading_weights, again.options.shading_weights)) {
             plan->options.shading_weights = again.options.shading_weights;
             plan->model_choice.shading = again.model_choice.shading;
