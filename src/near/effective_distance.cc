@@ -332,6 +332,13 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
   // explains. Even where the object's model found D, its lobe still carried part of the fall-off
   // (a Lambertian sphere under a dome, directions only: 7.68° with the distant choice's Phong
   // lobe kept, 3.80° chosen again, its Lambert run 4.26°; DiLiGenT's ball 1.13° -> 1.12°).
+  // A distance chosen from the images is the explanation of the fall-off across the object that
+  // the unweighted fits above preferred; weights and offsets by N·L measured on top of it take
+  // the same fall-off on a second time (a matte (N·L)^1.3 sphere under distant lights, read as
+  // near: each alone is right, both together bend the normals). So at a chosen distance the fits
+  // are not weighed by N·L; at a distance the user gave, the misfit left there is the object's.
+  solve::NormalOptions near_options = o.normals;
+  if (result.chosen) near_options.weigh_by_shading = false;
   const auto replan_start = Clock::now();
   solve::NormalPlan near_plan = plan;
   if (solve::NeedsPlanSample(o.normals)) {
@@ -339,13 +346,19 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
     sample.points_cam.clear();
     for (std::size_t i : plan_sample) sample.points_cam.push_back(near.points_cam[i]);
     WithLightsOf(sample, near);
-    near_plan = solve::PlanNormals(sample, o.normals, &starts);
+    near_plan = solve::PlanNormals(sample, near_options, &starts);
+  } else if (result.chosen) {
+    near_plan.options.weigh_by_shading = false;
+    near_plan.options.shading_weights = {};
+    near_plan.model_choice.shading = {};
   }
   {
     char line[200];
-    std::snprintf(line, sizeof line, "model chosen again with these lights: %s %.3g, %.2f s",
+    std::snprintf(line, sizeof line, "model chosen again with these lights: %s %.3g%s, %.2f s",
                   reflectance::LobeName(near_plan.options.model).c_str(),
-                  near_plan.options.shininess, SecondsSince(replan_start));
+                  near_plan.options.shininess,
+                  result.chosen && o.normals.weigh_by_shading ? " (not weighed by N.L)" : "",
+                  SecondsSince(replan_start));
     say(line);
   }
   solve::NormalResult last = result.distant;

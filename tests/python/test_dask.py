@@ -176,9 +176,9 @@ def test_effective_light_distance_equals_the_whole():
     r = idask.estimate_normals(da.from_array(out["images"], chunks=(-1, 25, 31, -1)), *args)
     assert r["effective_distance"]["distance_px"] == whole["effective_distance"]["distance_px"]
     assert len(r["effective_distance"]["passes"]) >= 1
-    # At its distance the matte sphere is Lambert's: the in-memory result then has no specular
-    # map nor model map, and Dask's (always all five) carry nothing there.
-    assert whole["model"] == "lambert"
+    # At its distance the matte sphere's held-out costs tie between Lambert and a lobe with ks near
+    # 0 (5.27 each): whichever is chosen, Dask's maps are the in-memory run's; where the in-memory
+    # result has no specular or model map (Lambert), Dask's (always all five) carry nothing.
     empty = {"specular": 0.0, "model_map": -1.0}
     for name in MAPS:
         if name in whole:
