@@ -347,11 +347,7 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
     for (std::size_t i : plan_sample) sample.points_cam.push_back(near.points_cam[i]);
     WithLightsOf(sample, near);
     near_plan = solve::PlanNormals(sample, near_options, &starts);
-  } else if (result.chosen) {
-    near_plan.options.weigh_by_shading = false;
-    near_plan.options.shading_weights = {};
-    near_plan.model_choice.shading = {};
-  }
+  }  // else no model choice: the plan has no weights to drop
   {
     char line[200];
     std::snprintf(line, sizeof line, "model chosen again with these lights: %s %.3g%s, %.2f s",

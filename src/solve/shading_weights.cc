@@ -12,6 +12,10 @@
 namespace iphong::solve {
 namespace {
 
+// Observations a band needs for its mean to be measured (fewer in the sample: no weights; in a
+// band of the offsets' rounds: its offset kept).
+constexpr std::size_t kBandObservations = 20;
+
 // The bias a band is weighed and offset by: its own in the lower half of the bands, toward the
 // terminator; none above, where a misfit near the mirror direction is the lobe's to explain.
 double TerminatorBias(const std::vector<double>& bias, int band) {
@@ -103,7 +107,8 @@ ShadingMisfit EstimateShadingWeights(const PhotometricData& data, const PixelFit
   };
   for (int round = 0; round < kShadingRounds; ++round) {
     const std::vector<Residual> seen = measure();
-    if (seen.size() < 20 * static_cast<std::size_t>(kShadingBands)) return ShadingMisfit{};
+    if (seen.size() < kBandObservations * static_cast<std::size_t>(kShadingBands))
+      return ShadingMisfit{};
     ShadingMisfit m;
     m.observations = seen.size();
     m.rounds = round + 1;
@@ -167,7 +172,7 @@ ShadingMisfit EstimateShadingWeights(const PhotometricData& data, const PixelFit
     double moved = 0;
     for (int band = 0; band < kShadingBands; ++band) {
       // A band the normals moved nearly every observation out of keeps its offset.
-      if (count[band] < 20) continue;
+      if (count[band] < kBandObservations) continue;
       offset[band] =
           std::clamp(TerminatorBias(sum, band) / static_cast<double>(count[band]), -1.0, 1.0);
       moved = std::max(moved, std::abs(offset[band] - out.weights.offset[band]));
