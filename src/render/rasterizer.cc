@@ -239,13 +239,23 @@ std::string RasterOptions::Validate() const {
 
 GBuffer Rasterize(const std::vector<RasterItem>& items, const geometry::Camera& camera,
                   const RasterOptions& options) {
+  for (const RasterItem& item : items) {
+    if (item.mesh == nullptr) throw std::invalid_argument("raster item without a mesh");
+    if (auto m = item.mesh->Validate(); !m.empty()) throw std::invalid_argument("mesh: " + m);
+  }
+  return internal::RasterizeValidatedMeshes(items, camera, options);
+}
+
+namespace internal {
+
+GBuffer RasterizeValidatedMeshes(const std::vector<RasterItem>& items,
+                                 const geometry::Camera& camera, const RasterOptions& options) {
   if (auto m = camera.Validate(); !m.empty()) throw std::invalid_argument(m);
   if (auto m = options.Validate(); !m.empty()) throw std::invalid_argument(m);
   bool any_color = false, any_uv = false;
   for (std::size_t i = 0; i < items.size(); ++i) {
     const auto* mesh = items[i].mesh;
     if (mesh == nullptr) throw std::invalid_argument("raster item without a mesh");
-    if (auto m = mesh->Validate(); !m.empty()) throw std::invalid_argument("mesh: " + m);
     if (!options.depth_only && mesh->corner_normals.size() != 3 * mesh->triangles.size()) {
       throw std::invalid_argument("mesh has no corner normals");
     }
@@ -337,4 +347,5 @@ GBuffer Rasterize(const std::vector<RasterItem>& items, const geometry::Camera& 
   return out;
 }
 
+}  // namespace internal
 }  // namespace iphong::render

@@ -75,4 +75,12 @@ struct GBuffer {
 GBuffer Rasterize(const std::vector<RasterItem>& items, const geometry::Camera& camera,
                   const RasterOptions& options);
 
+namespace internal {
+// Rasterize for meshes the caller has validated already (the renderer's Scene::Validate): the
+// per-vertex finiteness checks are a twentieth of a render, and a render rasterizes each mesh
+// once per shadow map as well.
+GBuffer RasterizeValidatedMeshes(const std::vector<RasterItem>& items,
+                                 const geometry::Camera& camera, const RasterOptions& options);
+}  // namespace internal
+
 }  // namespace iphong::render

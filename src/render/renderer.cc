@@ -88,7 +88,7 @@ class ShadowMap {
     RasterOptions raster;
     raster.depth_only = true;
     raster.threads = options.threads;
-    depth_ = Rasterize(items, camera_, raster).depth;
+    depth_ = internal::RasterizeValidatedMeshes(items, camera_, raster).depth;
     bias_texels_ = options.shadow_bias_texels;
   }
 
@@ -128,20 +128,27 @@ struct PointShader {
     return Shade<T>(material, normal, position, albedo, only_light);
   }
 
-  // With the object's material already in T (the per-pixel path converts it once per object).
+  // With the object's material, the normal, the albedo and the view already in T (the per-pixel
+  // path converts the material once per object and reads the rest as the G-buffer stores them).
   template <typename T>
-  Vec3T<T> Shade(reflectance::MaterialT<T> material, const Vec3d& normal, const Vec3d& position,
-                 const Vec3d& albedo, int only_light) const {
-    material.kd = albedo.cast<T>();
-    const Vec3T<T> view = camera.ViewDirection(position).cast<T>();
+  Vec3T<T> Shade(reflectance::MaterialT<T> material, const Vec3T<T>& normal, const Vec3d& position,
+                 const Vec3T<T>& albedo, const Vec3T<T>& view, int only_light) const {
+    material.kd = albedo;
     return reflectance::ShadeVisible<T>(
-        normal.cast<T>(), view, position.cast<T>(), material, scene.lighting, options.model,
+        normal, view, position.cast<T>(), material, scene.lighting, options.model,
         [&](std::size_t j, const Vec3T<T>& light_dir) {
           if (only_light >= 0 && static_cast<int>(j) != only_light) return false;
           if (!shadows[j]) return true;
-          const double n_dot_l = normal.dot(light_dir.template cast<double>());
+          const double n_dot_l =
+              normal.template cast<double>().dot(light_dir.template cast<double>());
           return n_dot_l <= 0 || shadows[j]->Lit(position, n_dot_l);  // unlit: no term anyway
         });
+  }
+  template <typename T>
+  Vec3T<T> Shade(const reflectance::MaterialT<T>& material, const Vec3d& normal,
+                 const Vec3d& position, const Vec3d& albedo, int only_light) const {
+    return Shade<T>(material, normal.cast<T>().eval(), position, albedo.cast<T>().eval(),
+                    camera.ViewDirection(position).cast<T>().eval(), only_light);
   }
   Vec3d operator()(const SceneObject& object, const Vec3d& normal, const Vec3d& position,
                    const Vec3d& albedo, int only_light) const {
@@ -364,7 +371,7 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
       std::any_of(scene.objects.begin(), scene.objects.end(),
                   [](const SceneObject& o) { return !o.albedo_texture.pixels.empty(); });
   raster.threads = options.threads;
-  GBuffer gbuffer = Rasterize(items, camera, raster);
+  GBuffer gbuffer = internal::RasterizeValidatedMeshes(items, camera, raster);
   double raster_seconds = SecondsSince(raster_start);
 
   const auto shade_start = Clock::now();
@@ -379,6 +386,8 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
   // Positions are reconstructed from depth only where something depends on them.
   const bool need_position =
       camera.type == CameraType::kPerspective || options.shadows || scene.lighting.HasPointLights();
+  const bool orthographic = camera.type == CameraType::kOrthographic;
+  const Vec3f view_f = camera.view_cam().cast<float>();  // the one view of an orthographic camera
   auto position_at = [&](std::size_t p) {
     return need_position ? gbuffer.Position(camera, p) : Vec3d::Zero().eval();
   };
@@ -410,11 +419,13 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
       ParallelFor(0, pixels, 4096, options.threads, [&](std::size_t b, std::size_t e) {
         for (std::size_t p = b; p < e; ++p) {
           if (!gbuffer.covered(p)) continue;
-          const float* n = gbuffer.normal_cam.pixels.data() + 3 * p;
-          const float* a = albedo.pixels.data() + 3 * p;
-          const Vec3f color =
-              shade.Shade<float>(scene.objects[gbuffer.object_id[p]], Vec3d(n[0], n[1], n[2]),
-                                 position_at(p), Vec3d(a[0], a[1], a[2]), only_light);
+          const Vec3d position = position_at(p);
+          const Vec3f color = shade.Shade<float>(
+              materials_f[gbuffer.object_id[p]],
+              Eigen::Map<const Vec3f>(gbuffer.normal_cam.pixels.data() + 3 * p), position,
+              Eigen::Map<const Vec3f>(albedo.pixels.data() + 3 * p),
+              orthographic ? view_f : camera.ViewDirection(position).cast<float>().eval(),
+              only_light);
           for (int c = 0; c < 3; ++c) image.pixels[3 * p + c] = color[c];
         }
       });
@@ -428,7 +439,7 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
         colored[i].corner_colors = &colors[i];
       }
       const auto t0 = Clock::now();
-      const GBuffer colored_buffer = Rasterize(colored, camera, raster);
+      const GBuffer colored_buffer = internal::RasterizeValidatedMeshes(colored, camera, raster);
       raster_seconds += SecondsSince(t0);
       for (std::size_t p = 0; p < pixels; ++p) {
         if (!colored_buffer.covered(p)) continue;
@@ -459,13 +470,17 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
   out.mask = Mask(scene.camera.width, scene.camera.height, false);
   for (int row = 0; row < scene.camera.height; ++row) {
     for (int col = 0; col < scene.camera.width; ++col) {
-      int covered = 0;
-      for (int dy = 0; dy < s; ++dy)
-        for (int dx = 0; dx < s; ++dx)
-          covered +=
-              gbuffer.covered(static_cast<std::size_t>(row * s + dy) * camera.width + col * s + dx);
       const std::size_t p = static_cast<std::size_t>(row) * scene.camera.width + col;
-      out.mask.inside[p] = 2 * covered > s * s;
+      if (fine) {
+        int covered = 0;
+        for (int dy = 0; dy < s; ++dy)
+          for (int dx = 0; dx < s; ++dx)
+            covered += gbuffer.covered(static_cast<std::size_t>(row * s + dy) * camera.width +
+                                       col * s + dx);
+        out.mask.inside[p] = 2 * covered > s * s;
+      } else {
+        out.mask.inside[p] = gbuffer.covered(p);
+      }
       if (!out.mask.inside[p]) {  // ground truth is 0 outside the mask
         for (int c = 0; c < 3; ++c)
           out.normal_cam.pixels[3 * p + c] = out.albedo.pixels[3 * p + c] = 0;
