@@ -120,6 +120,10 @@ struct PointShader {
   const Camera& camera;  // the (supersampled) camera the pixels belong to
   const RenderOptions& options;
   const std::vector<std::optional<ShadowMap>>& shadows;
+  // Per-light images: lighting j is the ambient and light j alone, so an image of one light
+  // evaluates that light only (filtering by visibility alone computed every light's direction,
+  // fall-off and LED factor at every pixel of every image). Empty without per-light images.
+  std::vector<reflectance::Lighting> single_light;
 
   template <typename T = double>
   Vec3T<T> Shade(const SceneObject& object, const Vec3d& normal, const Vec3d& position,
@@ -134,14 +138,15 @@ struct PointShader {
   Vec3T<T> Shade(reflectance::MaterialT<T> material, const Vec3T<T>& normal, const Vec3d& position,
                  const Vec3T<T>& albedo, const Vec3T<T>& view, int only_light) const {
     material.kd = albedo;
+    const bool one = only_light >= 0;
     return reflectance::ShadeVisible<T>(
-        normal, view, position.cast<T>(), material, scene.lighting, options.model,
-        [&](std::size_t j, const Vec3T<T>& light_dir) {
-          if (only_light >= 0 && static_cast<int>(j) != only_light) return false;
-          if (!shadows[j]) return true;
+        normal, view, position.cast<T>(), material, one ? single_light[only_light] : scene.lighting,
+        options.model, [&](std::size_t j, const Vec3T<T>& light_dir) {
+          const std::size_t light = one ? static_cast<std::size_t>(only_light) : j;
+          if (!shadows[light]) return true;
           const double n_dot_l =
               normal.template cast<double>().dot(light_dir.template cast<double>());
-          return n_dot_l <= 0 || shadows[j]->Lit(position, n_dot_l);  // unlit: no term anyway
+          return n_dot_l <= 0 || shadows[light]->Lit(position, n_dot_l);  // unlit: no term
         });
   }
   template <typename T>
@@ -375,7 +380,12 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
   double raster_seconds = SecondsSince(raster_start);
 
   const auto shade_start = Clock::now();
-  const PointShader shade{scene, camera, options, shadows};
+  PointShader shade{scene, camera, options, shadows, {}};
+  if (per_light) {
+    for (const reflectance::Light& light : scene.lighting.lights) {
+      shade.single_light.push_back({scene.lighting.ambient, {light}});
+    }
+  }
   std::vector<reflectance::MaterialT<float>> materials_f;
   for (const SceneObject& object : scene.objects) {
     materials_f.push_back(reflectance::CastMaterial<float>(object.material));

@@ -133,6 +133,53 @@ TEST(Renderer, PerLightImagesSumToTheCombinedImage) {
   }
 }
 
+// A per-light image is evaluated with its light alone: it must equal, bit for bit, a render of
+// the scene lit by that light only — each light's own shadow map, fall-off and LED factor — in
+// every shading mode. Lights of every kind, shadows cast on a floor, so a light paired with
+// another's shadow map or left out would show.
+TEST(Renderer, EachPerLightImageIsARenderOfItsLightAlone) {
+  Scene scene;
+  scene.camera = geometry::Camera::Orthographic(64, 64, 2.0);
+  scene.lighting.ambient = Vec3d(0.5, 0.6, 0.7);
+  SceneObject floor, ball;
+  floor.mesh = geometry::MakePlane(1.9, 4);
+  floor.material.ka = Vec3d::Constant(0.1);
+  floor.material.kd = Vec3d(0.8, 0.7, 0.6);
+  floor.material.ks = Vec3d::Constant(0.2);
+  floor.material.shininess = 7.5;
+  ball.mesh = geometry::MakeSphere(0.3, 4);
+  Eigen::Affine3d up = Eigen::Affine3d::Identity();
+  up.translate(Vec3d(0.3, 0, 0.6));
+  geometry::TransformMesh(ball.mesh, up);
+  ball.material = floor.material;
+  scene.objects = {floor, ball};
+  scene.lighting.lights = {
+      Light::Directional(Vec3d(-0.6, 0, 0.8), Vec3d(1, 0.9, 0.8)),
+      Light::Point(Vec3d(-1, 1, 3), Vec3d(9, 9, 9), true),
+      Light::Led(Vec3d(1.5, -1, 2.5), Vec3d(8, 7, 6), Vec3d(-1.5, 1, -2.5), 1.7),
+      Light::Directional(Vec3d(0.2, 0.7, 0.7), Vec3d(0.4, 0.5, 0.6))};
+  for (const Shading shading : {Shading::kPhong, Shading::kGouraud, Shading::kFlat}) {
+    RenderOptions options;
+    options.shading = shading;
+    options.shadows = true;
+    options.shadow_map_size = 256;
+    const RenderOutput all = Render(scene, options, true);
+    ASSERT_EQ(all.per_light.size(), scene.lighting.lights.size());
+    for (std::size_t j = 0; j < scene.lighting.lights.size(); ++j) {
+      Scene alone = scene;
+      alone.lighting.lights = {scene.lighting.lights[j]};
+      const RenderOutput one = Render(alone, options, false);
+      std::size_t differ = 0, lit = 0;
+      for (std::size_t i = 0; i < one.image.pixels.size(); ++i) {
+        differ += all.per_light[j].pixels[i] != one.image.pixels[i];
+        lit += one.image.pixels[i] > 0.2f;
+      }
+      EXPECT_EQ(differ, 0u) << ShadingName(shading) << ", light " << j;
+      EXPECT_GT(lit, 300u) << ShadingName(shading) << ", light " << j;
+    }
+  }
+}
+
 TEST(Renderer, GroundTruthNormalsAreExactOnAPlane) {
   Scene scene;
   scene.camera = geometry::Camera::Orthographic(32, 32, 2.0);
