@@ -76,9 +76,9 @@ GBuffer Rasterize(const std::vector<RasterItem>& items, const geometry::Camera& 
                   const RasterOptions& options);
 
 namespace internal {
-// Rasterize for meshes the caller has validated already (the renderer's Scene::Validate): the
-// per-vertex finiteness checks are a twentieth of a render, and a render rasterizes each mesh
-// once per shadow map as well.
+// Rasterize for meshes the caller has validated already (the renderer's Scene::Validate): a
+// render rasterizes each mesh once per shadow map and again for the image, and would otherwise
+// check every vertex and corner normal each time.
 GBuffer RasterizeValidatedMeshes(const std::vector<RasterItem>& items,
                                  const geometry::Camera& camera, const RasterOptions& options);
 }  // namespace internal

@@ -29,6 +29,23 @@ Scene SphereScene(int subdivisions, int size) {
   return scene;
 }
 
+// A ball of radius 0.3 floating 0.6 above a floor plane (z = 0) at x = 0.3, both of `material`,
+// under an orthographic camera of size² pixels; no lights.
+Scene BallOnFloorScene(int size, const reflectance::Material& material) {
+  Scene scene;
+  scene.camera = geometry::Camera::Orthographic(size, size, 2.0);
+  SceneObject floor, ball;
+  floor.mesh = geometry::MakePlane(1.9, 4);
+  floor.material = material;
+  ball.mesh = geometry::MakeSphere(0.3, 4);
+  Eigen::Affine3d up = Eigen::Affine3d::Identity();
+  up.translate(Vec3d(0.3, 0, 0.6));
+  geometry::TransformMesh(ball.mesh, up);
+  ball.material = material;
+  scene.objects = {floor, ball};
+  return scene;
+}
+
 // Mean |rendered − analytic| over pixels both see, in [0, 1] image units.
 double MeanErrorAgainstAnalytic(const Scene& scene, const RenderOptions& options) {
   const RenderOutput out = Render(scene, options, false);
@@ -138,21 +155,13 @@ TEST(Renderer, PerLightImagesSumToTheCombinedImage) {
 // every shading mode. Lights of every kind, shadows cast on a floor, so a light paired with
 // another's shadow map or left out would show.
 TEST(Renderer, EachPerLightImageIsARenderOfItsLightAlone) {
-  Scene scene;
-  scene.camera = geometry::Camera::Orthographic(64, 64, 2.0);
+  reflectance::Material glossy;
+  glossy.ka = Vec3d::Constant(0.1);
+  glossy.kd = Vec3d(0.8, 0.7, 0.6);
+  glossy.ks = Vec3d::Constant(0.2);
+  glossy.shininess = 7.5;
+  Scene scene = BallOnFloorScene(64, glossy);
   scene.lighting.ambient = Vec3d(0.5, 0.6, 0.7);
-  SceneObject floor, ball;
-  floor.mesh = geometry::MakePlane(1.9, 4);
-  floor.material.ka = Vec3d::Constant(0.1);
-  floor.material.kd = Vec3d(0.8, 0.7, 0.6);
-  floor.material.ks = Vec3d::Constant(0.2);
-  floor.material.shininess = 7.5;
-  ball.mesh = geometry::MakeSphere(0.3, 4);
-  Eigen::Affine3d up = Eigen::Affine3d::Identity();
-  up.translate(Vec3d(0.3, 0, 0.6));
-  geometry::TransformMesh(ball.mesh, up);
-  ball.material = floor.material;
-  scene.objects = {floor, ball};
   scene.lighting.lights = {
       Light::Directional(Vec3d(-0.6, 0, 0.8), Vec3d(1, 0.9, 0.8)),
       Light::Point(Vec3d(-1, 1, 3), Vec3d(9, 9, 9), true),
@@ -210,20 +219,11 @@ TEST(Renderer, GroundTruthNormalsAreExactOnAPlane) {
 }
 
 TEST(Renderer, ShadowMapsDarkenThePlaneUnderASphere) {
-  Scene scene;
-  scene.camera = geometry::Camera::Orthographic(96, 96, 2.0);
+  reflectance::Material matte;
+  matte.ka = Vec3d::Constant(0.1);
+  matte.kd = Vec3d::Constant(0.8);
+  Scene scene = BallOnFloorScene(96, matte);
   scene.lighting.ambient = Vec3d::Constant(1);
-  scene.lighting.lights = {Light::Directional(Vec3d(0, 0, 1), Vec3d::Ones())};  // from the camera
-  SceneObject floor, ball;
-  floor.mesh = geometry::MakePlane(1.9, 4);
-  floor.material.ka = Vec3d::Constant(0.1);
-  floor.material.kd = Vec3d::Constant(0.8);
-  ball.mesh = geometry::MakeSphere(0.3, 4);
-  Eigen::Affine3d up = Eigen::Affine3d::Identity();
-  up.translate(Vec3d(0.3, 0, 0.6));
-  geometry::TransformMesh(ball.mesh, up);
-  ball.material = floor.material;
-  scene.objects = {floor, ball};
   // Light from the upper left: the ball's shadow falls down and to the right of it on the floor.
   scene.lighting.lights = {Light::Directional(Vec3d(-0.6, 0, 0.8), Vec3d::Ones())};
   RenderOptions lit, shadowed;
