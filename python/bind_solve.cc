@@ -104,7 +104,7 @@ py::dict CandidateDict(const solve::ModelCandidate& c) {
       py::arg("ks_prior_weight") = c.ks_prior_weight, py::arg("ks_prior") = ToList(c.ks_prior),
       py::arg("ambient_term") = ToList(c.ambient_term), py::arg("code_offset") = c.code_offset,
       py::arg("heldout_cost") = c.heldout_cost, py::arg("heldout_error") = c.heldout_error,
-      py::arg("fold_angle_deg") = c.fold_angle_deg);
+      py::arg("fold_angle_deg") = c.fold_angle_deg, py::arg("heldout_pixels") = c.heldout_pixels);
 }
 
 solve::ModelCandidate CandidateFrom(const py::dict& d) {
@@ -118,6 +118,7 @@ solve::ModelCandidate CandidateFrom(const py::dict& d) {
   c.heldout_cost = d["heldout_cost"].cast<double>();
   c.heldout_error = d["heldout_error"].cast<double>();
   c.fold_angle_deg = d["fold_angle_deg"].cast<double>();
+  if (d.contains("heldout_pixels")) c.heldout_pixels = d["heldout_pixels"].cast<std::size_t>();
   return c;
 }
 

@@ -249,7 +249,8 @@ void RunNormals(const NormalsCommandOptions& o) {
                         {"code_offset", m.code_offset},
                         {"heldout_cost", m.heldout_cost},
                         {"heldout_error", m.heldout_error},
-                        {"fold_angle_deg", m.fold_angle_deg}});
+                        {"fold_angle_deg", m.fold_angle_deg},
+                        {"heldout_pixels", m.heldout_pixels}});
     }
     std::size_t specular_pixels = 0, chosen_pixels = 0;
     for (float v : result.model_map.pixels) {

@@ -36,9 +36,10 @@ class LocalFitRefiner : public HeldOutRefiner {
 
 namespace internal {
 
-std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
-                                const std::vector<Sample>& sample, const std::vector<int>& fold,
-                                const ModelChoiceSettings& settings) {
+void HeldOutPixels(const PhotometricData& data, const ModelCandidate& m,
+                   const std::vector<Sample>& sample, const std::vector<int>& fold,
+                   const ModelChoiceSettings& settings, const std::vector<char>* which,
+                   std::vector<double>& cost, std::vector<double>& angle) {
   reflectance::ModelOptions model;
   model.lobe = m.lobe;
   PixelFitSettings fit = settings.fit;
@@ -48,7 +49,9 @@ std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
   if (m.ks_prior_weight > 0) fit.ks_prior = m.ks_prior, fit.ks_prior_weight = m.ks_prior_weight;
   fit.color_residuals = false;  // the search's luminance
   fit.rounds = kHeldOutFitRounds;
-  std::vector<double> cost(sample.size(), 0.0), angle(sample.size(), 0.0);
+  cost.assign(sample.size(), 0.0);
+  angle.assign(sample.size(), 0.0);
+  const auto wanted = [&](std::size_t i) { return !which || (*which)[i] != 0; };
   const auto record = [&](std::size_t i, const HeldOutResult& r) {
     cost[i] = r.cost;
     if (!r.normal[0].isZero() && !r.normal[1].isZero()) {
@@ -62,7 +65,7 @@ std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
       std::vector<double> buffer;
       for (std::size_t i = b; i < e; ++i) {
         const Sample& s = sample[i];
-        if (!fitter.Prepare(s.pixel)) continue;  // the sample was drawn where it succeeds
+        if (!wanted(i) || !fitter.Prepare(s.pixel)) continue;  // drawn where it succeeds
         record(i, HeldOutFromStart(refiner, (*settings.starts)[s.pixel], data.images,
                                    fitter.luminance(), fitter.usable(), fold.data(),
                                    fitter.threshold(), buffer, nullptr, fit.censor_bright));
@@ -96,18 +99,31 @@ std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
           for (std::size_t n = b; n < e; ++n) {
             const std::size_t i = index[tiles[t].pixels[n]];
             const Sample& s = sample[i];
-            if (!fitter.Prepare(s.pixel)) continue;  // the sample was drawn where it succeeds
+            if (!wanted(i) || !fitter.Prepare(s.pixel)) continue;  // drawn where it succeeds
             record(i, HeldOutSearch(search, table, fitter.luminance(), fitter.usable(), fold.data(),
                                     fitter.threshold(), buffer, false, &refiner));
           }
         });
   }
-  const double n = static_cast<double>(std::max<std::size_t>(1, sample.size()));
+}
+
+void SetHeldOutSummary(ModelCandidate& m, const std::vector<double>& cost,
+                       const std::vector<double>& angle) {
+  const double n = static_cast<double>(std::max<std::size_t>(1, cost.size()));
   double sum = 0, sq = 0;
   for (double c : cost) sum += c, sq += c * c;
   m.heldout_cost = sum / n;
   m.heldout_error = std::sqrt(std::max(0.0, sq / n - m.heldout_cost * m.heldout_cost) / n);
   m.fold_angle_deg = std::accumulate(angle.begin(), angle.end(), 0.0) / n;
+}
+
+std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
+                                const std::vector<Sample>& sample, const std::vector<int>& fold,
+                                const ModelChoiceSettings& settings) {
+  std::vector<double> cost, angle;
+  HeldOutPixels(data, m, sample, fold, settings, nullptr, cost, angle);
+  SetHeldOutSummary(m, cost, angle);
+  m.heldout_pixels = cost.size();
   return cost;
 }
 

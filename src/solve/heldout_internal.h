@@ -28,6 +28,17 @@ std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
                                 const std::vector<Sample>& sample, const std::vector<int>& fold,
                                 const ModelChoiceSettings& settings);
 
+// HeldOutCost's per-pixel parts: each sample pixel's cost and fold angle (degrees) where `which`
+// is nonzero (every pixel when null), 0 elsewhere. A pixel's figures do not depend on which
+// others are evaluated (near lights' tiles are made from the whole sample).
+void HeldOutPixels(const PhotometricData& data, const ModelCandidate& m,
+                   const std::vector<Sample>& sample, const std::vector<int>& fold,
+                   const ModelChoiceSettings& settings, const std::vector<char>* which,
+                   std::vector<double>& cost, std::vector<double>& angle);
+// m's held-out cost, its standard error and fold angle: the means over the pixels given.
+void SetHeldOutSummary(ModelCandidate& m, const std::vector<double>& cost,
+                       const std::vector<double>& angle);
+
 // Pixels spread over the object (SpreadIndices) with at least 3 usable observations (in each
 // fold's training lights, with `fold`).
 std::vector<Sample> SamplePixels(const PhotometricData& data, const ModelChoiceSettings& settings,

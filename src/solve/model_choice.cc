@@ -16,9 +16,10 @@
 
 namespace iphong::solve {
 
-using internal::HeldOutCost;
+using internal::HeldOutPixels;
 using internal::Sample;
 using internal::SamplePixels;
+using internal::SetHeldOutSummary;
 using internal::SharedSpecular;
 
 double LobeHalfWidthDeg(reflectance::Lobe lobe, double shininess) {
@@ -151,8 +152,58 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   };
   const std::vector<Sample>& sample = sample_of(ModelCandidate{});
   choice.pixels = sample.size();
-  const auto held_out = [&](ModelCandidate& m) {
-    return HeldOutCost(data, m, sample_of(m), fold, settings_for(m));
+  // Each model is scored first on every kRaceShare-th pixel of the sample (spread over the
+  // object like the sample); it is scored on the rest only if it is not already clearly worse
+  // than the lowest fully scored model, paired over those pixels (see kRaceStandardErrors).
+  const bool race = sample.size() >= kRaceShare * kRaceMinimumPixels;
+  std::vector<char> first(sample.size()), rest(sample.size());
+  std::vector<double> first_use(sample.size());
+  for (std::size_t i = 0; i < sample.size(); ++i) {
+    first[i] = !race || i % kRaceShare == 0;
+    rest[i] = !first[i];
+    first_use[i] = first[i];
+  }
+  std::vector<std::vector<double>> costs;  // per scored model, per sample pixel
+  std::vector<char> complete;              // scored on the whole sample
+  std::optional<std::size_t> leader;       // the lowest complete model
+  const auto held_out = [&](ModelCandidate m) {
+    std::vector<double> cost, angle;
+    const std::vector<Sample>& pixels = sample_of(m);
+    HeldOutPixels(data, m, pixels, fold, settings_for(m), &first, cost, angle);
+    bool whole = true;
+    if (race && leader) {
+      const auto [mean, error] =
+          PairedDifference(cost.data(), costs[*leader].data(), cost.size(), first_use.data());
+      if (mean > 0 && mean > kRaceStandardErrors * error) {
+        // Not scored further: its cost the leader's plus the paired excess measured so far.
+        std::vector<double> part, part_angle;
+        for (std::size_t i = 0; i < cost.size(); ++i) {
+          if (first[i]) part.push_back(cost[i]), part_angle.push_back(angle[i]);
+        }
+        SetHeldOutSummary(m, part, part_angle);
+        m.heldout_cost = choice.scored[*leader].heldout_cost + mean;
+        m.heldout_pixels = part.size();
+        whole = false;
+      }
+    }
+    if (whole) {
+      if (race) {
+        std::vector<double> more, more_angle;
+        HeldOutPixels(data, m, pixels, fold, settings_for(m), &rest, more, more_angle);
+        for (std::size_t i = 0; i < cost.size(); ++i) {
+          if (rest[i]) cost[i] = more[i], angle[i] = more_angle[i];
+        }
+      }
+      SetHeldOutSummary(m, cost, angle);
+      m.heldout_pixels = cost.size();
+      if (!leader || m.heldout_cost < choice.scored[*leader].heldout_cost) {
+        leader = choice.scored.size();
+      }
+    }
+    choice.scored.push_back(m);
+    costs.push_back(std::move(cost));
+    complete.push_back(whole);
+    return m.heldout_cost;
   };
   if (sample.empty()) {
     choice.chosen = family.front();
@@ -185,17 +236,8 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
       family.push_back(m);
     }
   }
-  std::vector<std::vector<double>> costs;
-  for (ModelCandidate& m : family) costs.push_back(held_out(m));
-  choice.scored = family;
-  const auto lowest = [&] {
-    return static_cast<std::size_t>(
-        std::min_element(choice.scored.begin(), choice.scored.end(),
-                         [](const ModelCandidate& a, const ModelCandidate& b) {
-                           return a.heldout_cost < b.heldout_cost;
-                         }) -
-        choice.scored.begin());
-  };
+  for (const ModelCandidate& m : family) held_out(m);
+  const auto lowest = [&] { return *leader; };
   // Each lobe's shininess refined from its own best grid point, so that the grid does not decide
   // between two lobes that predict alike (Phong n and Blinn-Phong about 4n): one step of √2
   // each way (not wider than a highlight), then a golden-section search of log n within √2 either
@@ -203,11 +245,12 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   const std::size_t grid_size = choice.scored.size();
   for (const reflectance::Lobe lobe : {reflectance::Lobe::kPhong, reflectance::Lobe::kBlinnPhong}) {
     // The lowest of this lobe's first `end` scores (in `variant`'s observations only, if given).
+    // Only complete models: a lobe none of whose grid points stayed in the race is not refined.
     const auto best_of = [&](std::size_t end, const ModelCandidate* variant) {
       std::optional<std::size_t> best;
       for (std::size_t i = 0; i < end; ++i) {
         const ModelCandidate& m = choice.scored[i];
-        if (m.lobe == lobe &&
+        if (complete[i] && m.lobe == lobe &&
             (!variant ||
              (m.ambient_term == variant->ambient_term && m.code_offset == variant->code_offset)) &&
             (!best || m.heldout_cost < choice.scored[*best].heldout_cost)) {
@@ -222,9 +265,7 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
     const auto evaluate = [&](double shininess) {
       ModelCandidate m = start;
       m.shininess = shininess;
-      costs.push_back(held_out(m));
-      choice.scored.push_back(m);
-      return m.heldout_cost;
+      return held_out(m);
     };
     for (double f : {std::sqrt(0.5), std::sqrt(2.0)}) {
       if (start.shininess * f >= MinimumShininess(lobe)) evaluate(start.shininess * f);
@@ -242,8 +283,7 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
       ModelCandidate m = refined;
       m.ambient_term = v.ambient_term;
       m.code_offset = v.code_offset;
-      costs.push_back(held_out(m));
-      choice.scored.push_back(m);
+      held_out(m);
     }
   }
   // How far each pixel's ks may stray from the object's: free, or pulled toward it with the
@@ -255,8 +295,7 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
       ModelCandidate m = lobe_best;
       m.ks_prior = shared;
       m.ks_prior_weight = weight;
-      costs.push_back(held_out(m));
-      choice.scored.push_back(m);
+      held_out(m);
     }
   }
   // Prediction first; among the models whose held-out cost is not distinguishable from the
@@ -274,6 +313,7 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   };
   std::size_t pick = lowest_index;
   for (std::size_t i = 0; i < choice.scored.size(); ++i) {
+    if (!complete[i]) continue;
     const auto [mean, error] =
         PairedDifference(costs[i].data(), costs[lowest_index].data(), costs[i].size());
     if (mean <= error && preferred(i, pick)) pick = i;

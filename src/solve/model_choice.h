@@ -31,6 +31,9 @@ struct ModelCandidate {
   double heldout_cost = 0;             // mean per pixel, in units of t²; filled by ChooseModel
   double heldout_error = 0;            // its standard error over the pixels
   double fold_angle_deg = 0;           // mean angle between the normals the two halves chose
+  // Pixels the cost was measured on: the sample's, or a share of them for a model dropped from
+  // the choice early (ChooseModel), whose cost is then the leader's plus its measured excess.
+  std::size_t heldout_pixels = 0;
 };
 
 // A specular lobe is a highlight only while it is clearly narrower than the diffuse term, whose
@@ -110,6 +113,17 @@ struct ModelChoice {
 // Codes of 10 bits or fewer are tested for truncation: from 11 bits half a code is below 0.025 %
 // of the range, under any photograph's noise.
 constexpr double kMinTestedCodeStep = 1.0 / 1023;
+
+// The choice scores each model first on every kRaceShare-th pixel of its sample and drops it
+// there when its cost exceeds the lowest fully scored model's, paired over those pixels, by more
+// than kRaceStandardErrors standard errors. The final choice treats models within one standard
+// error of the lowest (on the whole sample, about half the share's) as ties; a model whose excess
+// on a quarter of the pixels is 4 of that share's standard errors would have to fall by 3.5 of
+// them to come within the tie, a chance of about 2e-4 under the normal approximation. Models are
+// raced only when the share holds kRaceMinimumPixels pixels, for the standard error to mean much.
+constexpr int kRaceShare = 4;
+constexpr double kRaceStandardErrors = 4;
+constexpr std::size_t kRaceMinimumPixels = 50;
 
 // Throws nothing; with fewer than 6 lights (no half can be held out) the choice is Lambert.
 ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate> family,

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "solve/heldout_internal.h"
 #include "solve/metrics.h"
 #include "solve/model_choice.h"
 #include "solve/normals.h"
@@ -262,6 +263,47 @@ TEST(Normals, NoiseAloneDoesNotHandPixelsToLambert) {
   // 2 % more error than object-wide when any lower held-out cost decides (0.247° against
   // 0.242°); 0.244° at one standard error.
   EXPECT_LT(per_pixel, 1.01 * whole);
+}
+
+// Models clearly worse than the leader on a quarter of the sample are not scored on the rest
+// (kRaceStandardErrors). What makes that safe: every model scored on the whole sample has the cost
+// it would have had alone, and every model dropped early, scored on the whole sample after all,
+// is no tie with the chosen one — so the choice is the one scoring everything gives.
+TEST(Normals, ModelsClearlyWorseEarlyAreNotScoredFurtherAndNeverATie) {
+  const Synthetic s = MakeSphereData(Plastic(), 36, 0.01);
+  ModelChoiceSettings settings;
+  settings.sample = 400;
+  const ModelChoice choice = ChooseModel(s.data, ModelFamily(std::nullopt), settings);
+  ASSERT_EQ(choice.chosen.lobe, reflectance::Lobe::kPhong);
+  ASSERT_GE(choice.pixels, kRaceShare * kRaceMinimumPixels);
+  std::vector<std::size_t> pixels;
+  for (const internal::Sample& p : internal::SamplePixels(s.data, settings, &choice.fold)) {
+    pixels.push_back(p.pixel);
+  }
+  ASSERT_EQ(pixels.size(), choice.pixels);
+  ModelCandidate chosen = choice.chosen;
+  const std::vector<double> chosen_cost =
+      PixelHeldOutCosts(s.data, chosen, pixels, choice.fold, settings);
+  EXPECT_EQ(chosen.heldout_cost, choice.chosen.heldout_cost);
+  int dropped = 0;
+  for (const ModelCandidate& m : choice.scored) {
+    ModelCandidate alone = m;
+    const std::vector<double> cost =
+        PixelHeldOutCosts(s.data, alone, pixels, choice.fold, settings);
+    if (m.heldout_pixels == choice.pixels) {
+      EXPECT_EQ(m.heldout_cost, alone.heldout_cost) << m.shininess;
+      EXPECT_EQ(m.heldout_error, alone.heldout_error) << m.shininess;
+      continue;
+    }
+    ++dropped;
+    EXPECT_EQ(m.heldout_pixels, (choice.pixels + kRaceShare - 1) / kRaceShare);
+    EXPECT_GT(m.heldout_cost, choice.chosen.heldout_cost);
+    const auto [mean, error] = PairedDifference(cost.data(), chosen_cost.data(), cost.size());
+    EXPECT_GT(mean, error) << reflectance::LobeName(m.lobe) << " " << m.shininess;
+  }
+  std::printf("%d of %zu models dropped after a quarter of %zu pixels\n", dropped,
+              choice.scored.size(), choice.pixels);
+  EXPECT_GE(dropped, 5);  // Lambert and the broad lobes, at least
 }
 
 TEST(Normals, MatteObjectsChooseLambert) {
