@@ -397,7 +397,8 @@ depend on its own observations and the plan only, so any blocking gives the same
               py::arg("model") = reflectance::LobeName(c.lobe), py::arg("shininess") = c.shininess,
               py::arg("ambient_term") = ToList(c.ambient_term),
               py::arg("ks_prior_weight") = c.ks_prior_weight,
-              py::arg("code_offset") = c.code_offset, py::arg("heldout_cost") = c.heldout_cost));
+              py::arg("code_offset") = c.code_offset, py::arg("heldout_cost") = c.heldout_cost,
+              py::arg("heldout_pixels") = c.heldout_pixels));
         }
         out["model_scores"] = scores;
         if (const solve::ShadingMisfit& m = result.model_choice.shading; !m.weights.empty()) {

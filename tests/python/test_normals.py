@@ -126,6 +126,11 @@ def test_model_chosen_by_held_out_prediction_unless_named():
     assert out["model"] in ("phong", "blinn-phong")
     lambert = next(s["heldout_cost"] for s in scores if s["model"] == "lambert")
     assert min(s["heldout_cost"] for s in scores) < lambert  # the highlights are predicted
+    # Models far behind after a quarter of the 600-pixel sample are not scored further; the
+    # chosen one is scored on all of it.
+    assert {s["heldout_pixels"] for s in scores} == {150, 600}
+    assert any(s["heldout_pixels"] == 600 and s["model"] == out["model"]
+               and s["shininess"] == out["shininess"] for s in scores)
     assert out["specular"].shape == (80, 80, 3)
     assert iphong.angular_error(out["normals"], r["normals"], r["mask"])["mean_angular_error_deg"] < 0.5
     named = iphong.estimate_normals(r["images"], r["light_directions"], r["light_intensities"],
