@@ -242,7 +242,17 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   // between two lobes that predict alike (Phong n and Blinn-Phong about 4n): one step of √2
   // each way (not wider than a highlight), then a golden-section search of log n within √2 either
   // side of the best of the three (five more evaluations: within 4%).
+  // A lobe is refined only where its grid best predicts better than Lambert does: refining
+  // chooses among lobes that will be used, and a lobe no grid point of which beats Lambert would
+  // have to gain more than a standard error within a step of √2 to be chosen (a matte object's
+  // lobes all trail Lambert: a third of its choice was spent refining them).
   const std::size_t grid_size = choice.scored.size();
+  double lambert_cost = INFINITY;
+  for (std::size_t i = 0; i < grid_size; ++i) {
+    if (complete[i] && choice.scored[i].lobe == reflectance::Lobe::kLambert) {
+      lambert_cost = std::min(lambert_cost, choice.scored[i].heldout_cost);
+    }
+  }
   for (const reflectance::Lobe lobe : {reflectance::Lobe::kPhong, reflectance::Lobe::kBlinnPhong}) {
     // The lowest of this lobe's first `end` scores (in `variant`'s observations only, if given).
     // Only complete models: a lobe none of whose grid points stayed in the race is not refined.
@@ -260,7 +270,7 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
       return best;
     };
     const std::optional<std::size_t> grid_best = best_of(grid_size, nullptr);
-    if (!grid_best) continue;
+    if (!grid_best || !(choice.scored[*grid_best].heldout_cost < lambert_cost)) continue;
     const ModelCandidate start = choice.scored[*grid_best];
     const auto evaluate = [&](double shininess) {
       ModelCandidate m = start;

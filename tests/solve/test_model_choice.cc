@@ -306,6 +306,32 @@ TEST(Normals, ModelsClearlyWorseEarlyAreNotScoredFurtherAndNeverATie) {
   EXPECT_GE(dropped, 5);  // Lambert and the broad lobes, at least
 }
 
+// A lobe none of whose grid points predicts better than Lambert is not refined: on a matte
+// sphere every lobe trails Lambert, and the choice scores the grid alone (it used to refine
+// both lobes' shininess, a third of its work, and choose Lambert all the same).
+TEST(Normals, LobesThatTrailLambertOnTheGridAreNotRefined) {
+  reflectance::Material matte;
+  matte.kd = Vec3d(0.6, 0.5, 0.4);
+  const Synthetic s = MakeSphereData(matte, 12, 0.01);
+  const std::vector<ModelCandidate> grid = ModelFamily(std::nullopt);
+  const ModelChoice choice = ChooseModel(s.data, grid, ModelChoiceSettings{});
+  EXPECT_EQ(choice.chosen.lobe, reflectance::Lobe::kLambert);
+  double lambert = INFINITY;
+  for (const ModelCandidate& m : choice.scored) {
+    if (m.lobe == reflectance::Lobe::kLambert) lambert = std::min(lambert, m.heldout_cost);
+  }
+  for (const ModelCandidate& m : choice.scored) {
+    const bool on_grid = std::any_of(grid.begin(), grid.end(), [&](const ModelCandidate& g) {
+      return g.lobe == m.lobe && g.shininess == m.shininess;
+    });
+    EXPECT_TRUE(on_grid) << reflectance::LobeName(m.lobe) << " " << m.shininess;
+    if (m.lobe != reflectance::Lobe::kLambert) {
+      EXPECT_GT(m.heldout_cost, lambert);
+    }
+    EXPECT_EQ(m.ks_prior_weight, 0);
+  }
+}
+
 TEST(Normals, MatteObjectsChooseLambert) {
   reflectance::Material matte;
   matte.kd = Vec3d(0.6, 0.6, 0.6);
