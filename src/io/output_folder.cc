@@ -28,6 +28,9 @@ struct Registry {
   std::mutex mutex;
   std::map<const void*, std::function<bool()>> abandon;  // false: already committed
   std::map<const void*, std::string> targets;
+  // Outputs committed and since released: a signal that comes after them (the process is still
+  // finishing) reports them as complete, not as "nothing was written".
+  std::vector<std::string> completed;
 };
 Registry& Outputs() {
   // Never destroyed: a signal that arrives while the process exits still finds it whole.
@@ -39,8 +42,9 @@ void Register(const void* key, const std::string& target, std::function<bool()> 
   Outputs().abandon[key] = std::move(abandon);
   Outputs().targets[key] = target;
 }
-void Unregister(const void* key) {
+void Unregister(const void* key, bool complete) {
   std::lock_guard<std::mutex> lock(Outputs().mutex);
+  if (complete) Outputs().completed.push_back(Outputs().targets[key]);
   Outputs().abandon.erase(key);
   Outputs().targets.erase(key);
 }
@@ -66,7 +70,12 @@ OutputFolder::OutputFolder(const std::string& target, OutputFolderOptions option
 }
 
 OutputFolder::~OutputFolder() {
-  Unregister(this);
+  bool complete = false;
+  {
+    std::lock_guard<std::mutex> lock(*mutex_);
+    complete = committed_;
+  }
+  Unregister(this, complete);
   {
     std::lock_guard<std::mutex> lock(*mutex_);
     if (!committed_ && !abandoned_) RemoveStaging();
@@ -362,6 +371,7 @@ bool OutputFolder::Abandon() {
 AbandonReport AbandonOutputFolders() {
   std::lock_guard<std::mutex> lock(Outputs().mutex);
   AbandonReport report;
+  report.complete = Outputs().completed;
   for (auto& [key, abandon] : Outputs().abandon) {
     if (abandon()) {
       ++report.removed;
@@ -414,8 +424,9 @@ void WriteSingleOutputFile(const std::string& command, const std::string& path, 
   std::mutex mutex;  // before `partial`: its destructor unregisters the callback that uses it
   struct Temp {
     fs::path path;
+    bool placed = false;  // moved into place: complete
     ~Temp() {
-      Unregister(this);
+      Unregister(this, placed);
       if (!path.empty()) ::unlink(path.c_str());
     }
   } partial{temp};
@@ -442,6 +453,7 @@ void WriteSingleOutputFile(const std::string& command, const std::string& path, 
     ::unlink(temp.c_str());
   }
   partial.path.clear();
+  partial.placed = true;
   // List it, so a later --overwrite may replace it: the manifest is rewritten whole and renamed
   // into place, keeping what other commands listed.
   struct stat st {};

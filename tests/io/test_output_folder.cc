@@ -3,6 +3,7 @@
 // made is ever touched.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -81,6 +82,22 @@ TEST_F(OutputFolderTest, AbandonedOutputLeavesNothingNotEvenTheParentsItMade) {
   }
   EXPECT_EQ(Names(dir_.string()), (std::set<std::string>{"empty"}));
   EXPECT_TRUE(fs::is_empty(Path("empty")));
+}
+
+// A signal after an output was committed and its folder object released (the process is still
+// finishing) finds it complete: the interrupt's message said "nothing was written" beside a
+// folder holding the new output (an --overwrite render under SIGHUP, 1 of 24 in the CLI test).
+TEST_F(OutputFolderTest, AnOutputCommittedAndReleasedIsReportedComplete) {
+  Produce(Path("done"), "render", {{"x.txt", "1"}});
+  WriteSingleOutputFile("eval", Path("single.png"), false, {},
+                        [](const std::string& temp) { WriteTextFile(temp, "2"); });
+  const AbandonReport report = AbandonOutputFolders();
+  EXPECT_EQ(report.removed, 0u);
+  const auto listed = [&](const std::string& target) {
+    return std::count(report.complete.begin(), report.complete.end(), target) > 0;
+  };
+  EXPECT_TRUE(listed(Path("done")));
+  EXPECT_TRUE(listed(Path("single.png")));
 }
 
 TEST_F(OutputFolderTest, EmptyFolderIsUsedAndKeepsItsPermissions) {
