@@ -94,6 +94,8 @@ void BindIntegrate(py::module_& m) {
         summary["solve_seconds"] = s.solve_seconds;
         summary["total_seconds"] = s.total_seconds;
         summary["rms_residual"] = s.rms_residual;
+        summary["cut_edges"] = s.cut_edges;
+        summary["separated_pixels"] = s.separated_pixels;
         summary["memory_bytes"] = s.memory_bytes;
         py::dict out;
         out["height"] = ToArray(r.height);
@@ -110,12 +112,13 @@ void BindIntegrate(py::module_& m) {
       R"(Heights from a normal map (H, W, 3) in the camera frame (x right, y up, z toward the viewer).
 
 method: auto (dct on a full rectangle, else quadratic), quadratic (masked least squares), dct,
-fft (Frankot-Chellappa), bilateral (keeps depth discontinuities). mask: (H, W) bool, default the
-pixels with a non-zero normal. intrinsics (fx, fy, cx, cy) integrate log depth for a perspective
-camera. depth_prior (H, W): known heights or depths, NaN where unknown.
+fft (Frankot-Chellappa), bilateral (keeps depth discontinuities, not creases). mask: (H, W)
+bool, default the pixels with a non-zero normal. intrinsics (fx, fy, cx, cy) integrate log depth
+for a perspective camera. depth_prior (H, W): known heights or depths, NaN where unknown.
 Returns a dict: height (H, W) float32, NaN outside the mask (height toward the viewer in pixels x
 pixel_size, or depth for a perspective camera), continuity (H, W, 2) edge weights to the right and
-below (0 = cut), mask, and summary (method, solver, timings, iterations, rms_residual...).
+below (0 = cut), mask, and summary (method, solver, timings, iterations, rms_residual; for
+bilateral cut_edges and separated_pixels, the pixels the cuts part from the rest of theirs).
 Raises ValueError on bad input (size mismatch, empty mask, NaN, non-unit or back-facing normals).)");
 
   m.def(

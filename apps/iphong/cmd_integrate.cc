@@ -149,6 +149,10 @@ void RunIntegrate(IntegrateCommandOptions& o) {
       s.pixels, s.components, s.components == 1 ? "" : "s", integrate::MethodName(s.method),
       s.solver.c_str(), s.total_seconds, s.solve_seconds,
       s.iterations ? (", " + std::to_string(s.iterations) + " CG iterations").c_str() : "");
+  if (s.method == integrate::Method::kBilateral) {
+    Say(o.common, "Bilateral cuts: %zu edges; %zu pixels cut away from the rest of their part\n",
+        s.cut_edges, s.separated_pixels);
+  }
   Say(o.common,
       "Surface normals vs input: mean %.2f deg, median %.2f deg; mesh %zu vertices, %zu "
       "triangles\n",

@@ -260,6 +260,8 @@ IntegrateResult IntegrateNormals(const ImageF& normals_cam, const Mask& mask,
     s.rounds = out.rounds;
     s.iterations = out.iterations;
     s.rms_residual = out.rms_residual;
+    s.cut_edges = out.cut_edges;
+    s.separated_pixels = out.separated_pixels;
     s.memory_bytes = out.memory_bytes;
     result.continuity = std::move(out.continuity);
     std::size_t i = 0;

@@ -23,7 +23,10 @@
 //  - kBilateral: discontinuity-preserving, in the spirit of bilateral normal integration (Cao et
 //    al. 2022): each one-sided equation gets a weight σ(k·(r_other² − r_own²)) from the current
 //    residuals, so an edge whose both sides disagree with the surface (a depth step) is cut;
-//    iteratively reweighted until the energy settles.
+//    iteratively reweighted until the energy settles. Creases are not cut: an edge whose rise
+//    f_b − f_a lies between its two one-sided slopes (where any continuous surface puts it)
+//    keeps the quadratic weights, unless a side falls away toward it as at an occluding
+//    contour (its cosine to the view dropping by √2 or more over that pixel, or clamped).
 // The offset is fixed so the masked mean height (each connected part separately) is 0, or the
 // depth prior fixes it. Outside the mask the height is NaN.
 #pragma once
@@ -99,7 +102,11 @@ struct IntegrateSummary {
   double setup_seconds = 0;            // gradients and assembly
   double solve_seconds = 0;
   double total_seconds = 0;
-  double rms_residual = 0;       // of the edge equations, slope units
+  double rms_residual = 0;  // of the edge equations, slope units
+  // kBilateral: edges cut (continuity < 0.5), and the pixels the cuts separate from the largest
+  // joined piece of their part: how high such a piece sits against the rest is not measured by
+  // the normals (only the cut edges' residual weight places it).
+  std::size_t cut_edges = 0, separated_pixels = 0;
   std::size_t memory_bytes = 0;  // system matrix, factor and work vectors at their peak
 };
 

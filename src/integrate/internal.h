@@ -23,6 +23,7 @@ struct SparseOutcome {
   int rounds = 0;
   long long iterations = 0;
   double rms_residual = 0;
+  std::size_t cut_edges = 0, separated_pixels = 0;  // bilateral only
   std::size_t memory_bytes = 0;
   std::string solver;
 };

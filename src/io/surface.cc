@@ -104,6 +104,8 @@ SurfaceFiles WriteSurfaceFiles(OutputFolder& out, const std::string& prefix,
       {"total_seconds", s.total_seconds},
       {"memory_bytes", s.memory_bytes},
       {"rms_residual", s.rms_residual},
+      {"cut_edges", s.cut_edges},
+      {"separated_pixels", s.separated_pixels},
       {"back_facing_pixels", s.back_facing_pixels},  // nz <= 0, taken as grazing
       {"camera", frame.perspective ? "perspective" : "orthographic"},
       {"height_unit", frame.perspective ? "depth along the optical axis"
