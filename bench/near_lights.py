@@ -87,7 +87,7 @@ def diligent(args, tmp):
     print("| object | `--model lambert` | D = inf | **default** | D chosen (px, object sizes, "
           "test) | default solve s | D = inf solve s | ratio |")
     print("|---|---|---|---|---|---|---|---|")
-    for name, folder in objects():
+    for name, folder, _ in objects():
         if args.only and args.only not in name:
             continue
         common = ["--threads", args.threads]

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <deque>
 #include <nlohmann/json.hpp>
 
 #include "core/errors.h"
@@ -29,9 +30,11 @@ struct Registry {
   std::map<const void*, std::function<bool()>> abandon;  // false: already committed
   std::map<const void*, std::string> targets;
   // Outputs committed and since released: a signal that comes after them (the process is still
-  // finishing) reports them as complete, not as "nothing was written".
-  std::vector<std::string> completed;
+  // finishing) reports them as complete, not as "nothing was written". Only the latest are kept:
+  // a command writes one or two, and a Python session writing thousands must not grow this.
+  std::deque<std::string> completed;
 };
+constexpr std::size_t kCompletedKept = 16;
 Registry& Outputs() {
   // Never destroyed: a signal that arrives while the process exits still finds it whole.
   static Registry* registry = new Registry;
@@ -44,7 +47,10 @@ void Register(const void* key, const std::string& target, std::function<bool()> 
 }
 void Unregister(const void* key, bool complete) {
   std::lock_guard<std::mutex> lock(Outputs().mutex);
-  if (complete) Outputs().completed.push_back(Outputs().targets[key]);
+  if (complete) {
+    Outputs().completed.push_back(Outputs().targets[key]);
+    if (Outputs().completed.size() > kCompletedKept) Outputs().completed.pop_front();
+  }
   Outputs().abandon.erase(key);
   Outputs().targets.erase(key);
 }
@@ -371,7 +377,7 @@ bool OutputFolder::Abandon() {
 AbandonReport AbandonOutputFolders() {
   std::lock_guard<std::mutex> lock(Outputs().mutex);
   AbandonReport report;
-  report.complete = Outputs().completed;
+  report.complete.assign(Outputs().completed.begin(), Outputs().completed.end());
   for (auto& [key, abandon] : Outputs().abandon) {
     if (abandon()) {
       ++report.removed;

@@ -237,7 +237,6 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
     }
   }
   for (const ModelCandidate& m : family) held_out(m);
-  const auto lowest = [&] { return *leader; };
   // Each lobe's shininess refined from its own best grid point, so that the grid does not decide
   // between two lobes that predict alike (Phong n and Blinn-Phong about 4n): one step of √2
   // each way (not wider than a highlight), then a golden-section search of log n within √2 either
@@ -298,7 +297,7 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   }
   // How far each pixel's ks may stray from the object's: free, or pulled toward it with the
   // weight of 1 or 10 observations of the lobe's peak, also by prediction.
-  if (const ModelCandidate lobe_best = choice.scored[lowest()];
+  if (const ModelCandidate lobe_best = choice.scored[*leader];
       lobe_best.lobe != reflectance::Lobe::kLambert) {
     const Vec3d shared = SharedSpecular(data, lobe_best, settings_for(lobe_best));
     for (double weight : {1.0, 10.0}) {
@@ -314,7 +313,7 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   // fit ks ≈ 0 and tie with it) — else the one whose two halves agree best on the normal: two
   // models can predict the images equally well while one of them leaves the normal less
   // determined.
-  const std::size_t lowest_index = lowest();
+  const std::size_t lowest_index = *leader;
   const auto preferred = [&](std::size_t i, std::size_t j) {
     const bool lambert_i = choice.scored[i].lobe == reflectance::Lobe::kLambert;
     const bool lambert_j = choice.scored[j].lobe == reflectance::Lobe::kLambert;

@@ -98,6 +98,14 @@ TEST_F(OutputFolderTest, AnOutputCommittedAndReleasedIsReportedComplete) {
   };
   EXPECT_TRUE(listed(Path("done")));
   EXPECT_TRUE(listed(Path("single.png")));
+  // A long session (Python writing output after output) keeps only the latest few.
+  for (int i = 0; i < 40; ++i) {
+    WriteSingleOutputFile("eval", Path("many" + std::to_string(i) + ".png"), false, {},
+                          [](const std::string& temp) { WriteTextFile(temp, "3"); });
+  }
+  const AbandonReport later = AbandonOutputFolders();
+  EXPECT_LE(later.complete.size(), 16u);
+  EXPECT_EQ(later.complete.back(), Path("many39.png"));
 }
 
 TEST_F(OutputFolderTest, EmptyFolderIsUsedAndKeepsItsPermissions) {
