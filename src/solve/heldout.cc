@@ -39,7 +39,7 @@ namespace internal {
 void HeldOutPixels(const PhotometricData& data, const ModelCandidate& m,
                    const std::vector<Sample>& sample, const std::vector<int>& fold,
                    const ModelChoiceSettings& settings, const std::vector<char>* which,
-                   std::vector<double>& cost, std::vector<double>& angle) {
+                   std::vector<double>& cost, std::vector<double>& angle, HeldOutTables* tables) {
   reflectance::ModelOptions model;
   model.lobe = m.lobe;
   PixelFitSettings fit = settings.fit;
@@ -80,15 +80,38 @@ void HeldOutPixels(const PhotometricData& data, const ModelCandidate& m,
       pixels[i] = sample[i].pixel;
       index[sample[i].pixel] = i;
     }
-    const std::vector<LightTile> tiles =
-        MakeLightTiles(data, std::min(8.0, 2 * TileToleranceDeg(m.lobe, m.shininess)), &pixels);
+    HeldOutTables own;
+    HeldOutTables& kept = tables ? *tables : own;
+    if (kept.tiles.empty()) {
+      kept.tiles =
+          MakeLightTiles(data, std::min(8.0, 2 * TileToleranceDeg(m.lobe, m.shininess)), &pixels);
+      kept.tables.assign(kept.tiles.size(), nullptr);
+    }
+    const std::vector<LightTile>& tiles = kept.tiles;
     ForEachTileChunk(
         tiles, 16, settings.threads,
-        [&](std::size_t t) {
-          return CandidateTable(tiles[t].light_directions, model, m.shininess,
-                                settings.search_candidates, fold);
+        [&](std::size_t t) -> std::shared_ptr<const CandidateTable> {
+          if (std::none_of(tiles[t].pixels.begin(), tiles[t].pixels.end(),
+                           [&](std::size_t p) { return wanted(index[p]); })) {
+            return nullptr;  // none of its pixels is scored in this call
+          }
+          {
+            std::lock_guard<std::mutex> lock(kept.mutex);
+            if (kept.tables[t]) return kept.tables[t];
+          }
+          auto table = std::make_shared<const CandidateTable>(
+              tiles[t].light_directions, model, m.shininess, settings.search_candidates, fold);
+          // Kept for a later call only when there is one to come (the caller holds `tables`).
+          if (tables) {
+            std::lock_guard<std::mutex> lock(kept.mutex);
+            kept.tables[t] = table;
+          }
+          return table;
         },
-        [&](std::size_t t, const CandidateTable& table, std::size_t b, std::size_t e) {
+        [&](std::size_t t, const std::shared_ptr<const CandidateTable>& held, std::size_t b,
+            std::size_t e) {
+          if (!held) return;
+          const CandidateTable& table = *held;
           NormalSearch search(
               table, 16,
               m.ks_prior_weight > 0 ? std::optional(internal::Luminance(m.ks_prior)) : std::nullopt,

@@ -2,9 +2,13 @@
 // typical ks; not part of the public interface (model_choice.h has PixelHeldOutCosts).
 #pragma once
 
+#include <memory>
+#include <mutex>
 #include <vector>
 
+#include "solve/light_tiles.h"
 #include "solve/model_choice.h"
+#include "solve/search.h"
 
 namespace iphong::solve::internal {
 
@@ -31,10 +35,19 @@ std::vector<double> HeldOutCost(const PhotometricData& data, ModelCandidate& m,
 // HeldOutCost's per-pixel parts: each sample pixel's cost and fold angle (degrees) where `which`
 // is nonzero (every pixel when null), 0 elsewhere. A pixel's figures do not depend on which
 // others are evaluated (near lights' tiles are made from the whole sample).
+// `tables`, when given, keeps one model's light tiles and candidate tables between calls on
+// parts of the same sample (the race scores a model on a quarter, then on the rest): the second
+// call reuses what the first made instead of making it again.
+struct HeldOutTables {
+  std::vector<LightTile> tiles;                               // made on first use
+  std::vector<std::shared_ptr<const CandidateTable>> tables;  // per tile, once made
+  std::mutex mutex;
+};
 void HeldOutPixels(const PhotometricData& data, const ModelCandidate& m,
                    const std::vector<Sample>& sample, const std::vector<int>& fold,
                    const ModelChoiceSettings& settings, const std::vector<char>* which,
-                   std::vector<double>& cost, std::vector<double>& angle);
+                   std::vector<double>& cost, std::vector<double>& angle,
+                   HeldOutTables* tables = nullptr);
 // m's held-out cost, its standard error and fold angle: the means over the pixels given.
 void SetHeldOutSummary(ModelCandidate& m, const std::vector<double>& cost,
                        const std::vector<double>& angle);

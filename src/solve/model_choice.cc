@@ -169,7 +169,9 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   const auto held_out = [&](ModelCandidate m) {
     std::vector<double> cost, angle;
     const std::vector<Sample>& pixels = sample_of(m);
-    HeldOutPixels(data, m, pixels, fold, settings_for(m), &first, cost, angle);
+    internal::HeldOutTables tables;  // the quarter's, reused for the rest
+    HeldOutPixels(data, m, pixels, fold, settings_for(m), &first, cost, angle,
+                  race ? &tables : nullptr);
     bool whole = true;
     if (race && leader) {
       const auto [mean, error] =
@@ -189,7 +191,7 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
     if (whole) {
       if (race) {
         std::vector<double> more, more_angle;
-        HeldOutPixels(data, m, pixels, fold, settings_for(m), &rest, more, more_angle);
+        HeldOutPixels(data, m, pixels, fold, settings_for(m), &rest, more, more_angle, &tables);
         for (std::size_t i = 0; i < cost.size(); ++i) {
           if (rest[i]) cost[i] = more[i], angle[i] = more_angle[i];
         }
