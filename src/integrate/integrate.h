@@ -76,7 +76,9 @@ struct IntegrateOptions {
   // Perspective without prior: the masked geometric mean depth.
   double reference_depth = 1.0;
   // kBilateral
-  double stiffness = 2.0;  // k of the sigmoid, in 1/pixel² (1/log-depth² in perspective)
+  // k of the sigmoid, in 1/pixel²; in perspective the residuals of log depth are taken times the
+  // focal length (pixel widths at that depth), so a step cuts alike under either camera.
+  double stiffness = 2.0;
   int max_rounds = 50;
   double energy_tolerance = 1e-4;  // relative energy change that stops the reweighting
   // Iterative linear solver

@@ -19,6 +19,7 @@ namespace {
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
 double Sigmoid(double x) { return 1 / (1 + std::exp(-x)); }
+double Square(double x) { return x * x; }
 
 // The mask's pixels and their right / lower neighbours, in mask (row-major) order.
 struct Grid {
@@ -359,14 +360,20 @@ SparseOutcome SolveMasked(const GridGradients& g, const Mask& mask,
     if (std::abs(previous_energy - energy) <= options.energy_tolerance * energy) break;
     previous_energy = energy;
     // σ(k(r_other² − r_own²)); a missing side counts as a zero residual.
-    const double k = options.stiffness;
+    // The stiffness is per pixel² in both cameras: under perspective a residual of log depth
+    // times the focal length is the depth step in pixel widths at that depth (a pixel at depth d
+    // spans d/f), so a step cuts alike whichever camera saw it.
+    const double k_col =
+        options.stiffness * (options.perspective ? Square(options.intrinsics.fx) : 1);
+    const double k_row =
+        options.stiffness * (options.perspective ? Square(options.intrinsics.fy) : 1);
     for (std::size_t a = 0; a < n; ++a) {
       const double fc = r_fwd_col[a] * r_fwd_col[a], bc = r_bwd_col[a] * r_bwd_col[a];
       const double fr = r_fwd_row[a] * r_fwd_row[a], br = r_bwd_row[a] * r_bwd_row[a];
-      u.forward_col[a] = Sigmoid(k * (bc - fc));
-      u.backward_col[a] = Sigmoid(k * (fc - bc));
-      u.forward_row[a] = Sigmoid(k * (br - fr));
-      u.backward_row[a] = Sigmoid(k * (fr - br));
+      u.forward_col[a] = Sigmoid(k_col * (bc - fc));
+      u.backward_col[a] = Sigmoid(k_col * (fc - bc));
+      u.forward_row[a] = Sigmoid(k_row * (br - fr));
+      u.backward_row[a] = Sigmoid(k_row * (fr - br));
     }
     // Heights toward the viewer (orthographic) or log depth away from it (perspective).
     const double toward_viewer = options.perspective ? -1.0 : 1.0;

@@ -395,6 +395,75 @@ TEST(Integrate, PerspectiveSphereLogDepth) {
   EXPECT_LT(worst, 5e-3);
 }
 
+// A ball 2 units in front of a tilted plane, seen by a pinhole camera: the depth steps at its
+// silhouette are cut at the default stiffness, as under the orthographic camera. The stiffness
+// is per pixel² in both (log depth's residuals times the focal length): taken per log depth²,
+// steps of a fraction of the depth never reached the sigmoid and bilateral equalled quadratic.
+TEST(Integrate, BilateralKeepsAPerspectiveDepthStep) {
+  const int w = 160, h = 140;
+  const double f = 150, cx = 80, cy = 70;
+  const Vec3d centre(0, 0, -4), plane_normal = Vec3d(0.3, 0.1, 1).normalized(),
+                                plane_point(0, 0, -6);
+  ImageF normals(w, h, 3, 0.0f), depth(w, h, 1, NAN);
+  Mask mask(w, h, true), plane(w, h, false), ball(w, h, false);
+  std::vector<char> on_ball(w * h, 0);
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) {
+      const Vec3d ray = Vec3d((c + 0.5 - cx) / f, -(r + 0.5 - cy) / f, -1.0);
+      const double a = ray.squaredNorm(), b = -2 * ray.dot(centre), cc = centre.squaredNorm() - 1;
+      const double disc = b * b - 4 * a * cc;
+      const double t_ball = disc > 0 ? (-b - std::sqrt(disc)) / (2 * a) : INFINITY;
+      const double t_plane = plane_point.dot(plane_normal) / ray.dot(plane_normal);
+      const bool hit_ball = t_ball < t_plane;
+      const Vec3d n = hit_ball ? Vec3d((t_ball * ray - centre).normalized()) : plane_normal;
+      float* o = normals.at(c, r);
+      o[0] = n.x(), o[1] = n.y(), o[2] = n.z();
+      *depth.at(c, r) = static_cast<float>(hit_ball ? t_ball : t_plane);
+      on_ball[r * w + c] = hit_ball;
+    }
+  }
+  // Each side two pixels away from the silhouette.
+  for (int r = 2; r < h - 2; ++r) {
+    for (int c = 2; c < w - 2; ++c) {
+      bool same = true;
+      for (int d = -2; d <= 2; ++d) {
+        same = same && on_ball[r * w + c + d] == on_ball[r * w + c] &&
+               on_ball[(r + d) * w + c] == on_ball[r * w + c];
+      }
+      if (same) (on_ball[r * w + c] ? ball : plane).inside[r * w + c] = 1;
+    }
+  }
+  // RMSE of log depth over a region, its mean removed (depth is known up to scale).
+  const auto log_rmse = [&](const ImageF& estimate, const Mask& region) {
+    double mean = 0, sq = 0;
+    std::size_t n = 0;
+    for (std::size_t p = 0; p < region.inside.size(); ++p) {
+      if (region.inside[p]) mean += std::log(estimate.pixels[p] / depth.pixels[p]), ++n;
+    }
+    mean /= n;
+    for (std::size_t p = 0; p < region.inside.size(); ++p) {
+      if (!region.inside[p]) continue;
+      const double e = std::log(estimate.pixels[p] / depth.pixels[p]) - mean;
+      sq += e * e;
+    }
+    return std::sqrt(sq / n);
+  };
+  IntegrateOptions options;
+  options.perspective = true;
+  options.intrinsics = {f, f, cx, cy};
+  options.method = Method::kQuadratic;
+  const IntegrateResult q = IntegrateNormals(normals, mask, options);
+  options.method = Method::kBilateral;
+  const IntegrateResult b = IntegrateNormals(normals, mask, options);
+  const double plane_q = log_rmse(q.height, plane), plane_b = log_rmse(b.height, plane);
+  const double ball_q = log_rmse(q.height, ball), ball_b = log_rmse(b.height, ball);
+  std::printf("perspective: plane %.5f -> %.5f, ball %.5f -> %.5f, %zu edges cut, %d rounds\n",
+              plane_q, plane_b, ball_q, ball_b, b.summary.cut_edges, b.summary.rounds);
+  EXPECT_LT(plane_b, 0.25 * plane_q);
+  EXPECT_LT(ball_b, 0.25 * ball_q);
+  EXPECT_GT(b.summary.cut_edges, 40u);
+}
+
 TEST(Integrate, OrthographicPriorFixesOffsetAndPixelSizeScales) {
   const Synthetic s = MakeSynthetic(100, 100, SphereCap(100),
                                     [](double x, double y) { return x * x + y * y < 40 * 40; });
