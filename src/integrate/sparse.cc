@@ -81,22 +81,18 @@ void MergeOneSided(double ua, double ub, double slope_a, double slope_b, double 
   *target = ua + ub > 0 ? (ua * slope_a + ub * slope_b) / (ua + ub) : 0.5 * (slope_a + slope_b);
 }
 
-// Creases are not depth steps. An edge a → b whose surface rises (f_b − f_a) within the interval
-// between its two one-sided slopes is kept joined with the quadratic problem's weights (its
-// target the mean slope, the middle of the interval): a continuous surface climbs between a and
-// b by the integral of its slope, which lies between the slopes on either side however sharply
-// it folds in between. The sigmoids alone cannot tell a crease from a step: at both, the two
-// one-sided equations disagree with the surface, so every deep fold was cut, and a fold crossing
-// the object from rim to rim left the part beyond floating on the cut edges' residual weight;
-// with the small inconsistencies of recovered normals it tore away.
-// The exception is an occluding contour, where a depth step can hide: there the surface near
-// the edge turns away from the camera, so the current rise, smeared by the surface's
-// continuity, is no evidence and the sigmoids decide. Near a contour the height of a smooth
-// surface goes like the square root of the distance to it, so the cosine to the view falls at
-// least by √2 over the last pixel (√(d / (d + 1)) for a pixel d < 1 from it); a side that
-// descends toward the edge with its cosine that far below one of its other neighbours' (the
-// outline need not cross the grid square on), or clamped at `min_cos`, is taken for one. A
-// fold's walls keep their cosine.
+// Creases are not depth steps. A continuous surface rises between two pixel centres by the
+// integral of its slope, which lies between the two pixels' slopes however sharply it folds in
+// between; a step leaves that interval. So an edge whose rise f_b − f_a lies inside it keeps the
+// quadratic weights (its target the mean slope): the sigmoids alone would cut it, since at a
+// crease both one-sided equations disagree with the surface as at a step, and a fold cut from rim
+// to rim lets the part beyond drift on the cut edges' residual weight (a tear).
+// Except at an occluding contour, where a step hides behind a rise the surface's continuity has
+// smeared, so the sigmoids decide. Near a contour a smooth surface's height goes like the square
+// root of the distance to it, so the cosine to the view falls by √2 or more over the last pixel
+// (√(d / (d + 1)) for a pixel d < 1 from it): a side that descends toward the edge with its
+// cosine that far below one of its other neighbours' (the outline need not run across the edge),
+// or clamped at `min_cos`, is taken for one. A fold's walls keep their cosine.
 // `slope` is d_col for an edge to the right, d_row for one below.
 bool JoinedCrease(const Grid& grid, const GridGradients& g, const std::vector<float>& slope, int a,
                   int b, double rise, double min_cos, double toward_viewer) {
