@@ -408,13 +408,15 @@ SparseOutcome SolveMasked(const GridGradients& g, const Mask& mask,
 
   // Cut edges, and the pixels they separate from the largest joined piece of their part: the
   // normals say nothing of how high such a piece sits against the rest.
+  const auto joined = [&](std::size_t a, int axis) {
+    return out.continuity.pixels[2 * static_cast<std::size_t>(grid.pixel[a]) + axis] >= 0.5f;
+  };
   if (bilateral) {
-    auto joined = [&](std::size_t a, int axis) {
-      return out.continuity.pixels[2 * static_cast<std::size_t>(grid.pixel[a]) + axis] >= 0.5f;
-    };
     for (std::size_t a = 0; a < n; ++a) {
       out.cut_edges += (grid.right[a] >= 0 && !joined(a, 0)) + (grid.down[a] >= 0 && !joined(a, 1));
     }
+  }
+  if (out.cut_edges > 0) {
     int pieces = 0;
     const std::vector<int> piece = Components(grid, &pieces, joined);
     std::vector<std::size_t> piece_size(pieces, 0), largest(out.components, 0),
