@@ -6,6 +6,7 @@
 
 #include "near/near.h"
 #include "near/near_scenes.h"
+#include "solve/heldout_internal.h"
 #include "solve/light_tiles.h"
 #include "solve/metrics.h"
 #include "solve/model_choice.h"
@@ -150,6 +151,47 @@ TEST(NearLights, DomeOfLightsAtOneAndAHalfObjectSizes) {
                   0.2 * solve::LobeHalfWidthDeg(reflectance::Lobe::kPhong, 30));
     }
   }
+}
+
+// Under near lights each tile of the model choice's sample has its own candidate table, and the
+// race scores a model on a quarter of the sample, then on the rest with the tables the first call
+// made (tiles none of whose pixels the quarter holds make none then). A model scored whole must
+// cost exactly what it costs scored alone in one call, every table made afresh.
+TEST(NearLights, RacedModelsCostWhatTheyCostAlone) {
+  NearScene s = DomeScene(3, 16, 1, true);
+  s.noise_sigma = 0.002;
+  const NearCapture c = RenderNearSphere(s);
+  std::vector<double> depth;
+  std::vector<Vec3d> normals;
+  const solve::PhotometricData data = AtTheTruth(c, s.frame, &depth, &normals);
+  solve::ModelChoiceSettings settings;
+  settings.sample = 400;
+  const solve::ModelChoice choice =
+      solve::ChooseModel(data, solve::ModelFamily(std::nullopt), settings);
+  ASSERT_GE(choice.pixels, solve::kRaceShare * solve::kRaceMinimumPixels);
+  std::vector<std::size_t> pixels;
+  for (const solve::internal::Sample& p :
+       solve::internal::SamplePixels(data, settings, &choice.fold)) {
+    pixels.push_back(p.pixel);
+  }
+  ASSERT_EQ(pixels.size(), choice.pixels);
+  // More than one tile, or the tables are not what is tested.
+  ASSERT_GT(
+      solve::MakeLightTiles(
+          data, 2 * solve::TileToleranceDeg(choice.chosen.lobe, choice.chosen.shininess), &pixels)
+          .size(),
+      1u);
+  int whole = 0;
+  for (const solve::ModelCandidate& m : choice.scored) {
+    if (m.heldout_pixels != choice.pixels) continue;
+    solve::ModelCandidate alone = m;
+    solve::PixelHeldOutCosts(data, alone, pixels, choice.fold, settings);
+    EXPECT_EQ(m.heldout_cost, alone.heldout_cost)
+        << reflectance::LobeName(m.lobe) << " " << m.shininess;
+    EXPECT_EQ(m.heldout_error, alone.heldout_error);
+    ++whole;
+  }
+  EXPECT_GE(whole, 3);
 }
 
 // Lights in one plane round the lens say nothing of the object's distance: the images choose
