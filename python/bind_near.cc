@@ -88,6 +88,13 @@ py::dict DistanceDict(const near::EffectiveDistanceResult& r) {
         py::arg("distance_px") = c.distance_px, py::arg("test") = c.criterion,
         py::arg("heldout_cost") = c.heldout_cost, py::arg("heldout_error") = c.heldout_error));
   }
+  py::list position_checks;
+  for (const near::PositionCheck& c : r.position_checks) {
+    position_checks.append(py::dict(py::arg("distance_px") = c.distance_px,
+                                    py::arg("test") = c.criterion, py::arg("heldout_gain") = c.gain,
+                                    py::arg("heldout_gain_error") = c.gain_error,
+                                    py::arg("refused") = c.refused));
+  }
   py::list passes;
   for (const near::NearPass& p : r.passes) {
     passes.append(
@@ -101,8 +108,8 @@ py::dict DistanceDict(const near::EffectiveDistanceResult& r) {
                   py::arg("model_loss_error") = std::isnan(r.model_loss_error)
                                                     ? py::object(py::none())
                                                     : py::float_(r.model_loss_error),
-                  py::arg("candidates") = candidates, py::arg("passes") = passes,
-                  py::arg("seconds") = r.seconds);
+                  py::arg("position_checks") = position_checks, py::arg("candidates") = candidates,
+                  py::arg("passes") = passes, py::arg("seconds") = r.seconds);
 }
 
 double EffectiveDistanceFrom(const py::object& value) {

@@ -169,6 +169,15 @@ nlohmann::json EffectiveDistanceJson(const near::EffectiveDistanceResult& r) {
          {"heldout_cost", c.heldout_cost},
          {"heldout_error", c.heldout_error}});
   }
+  // Each proposed D checked against points placed by their normals (near::PositionCheck).
+  nlohmann::json position_checks = nlohmann::json::array();
+  for (const near::PositionCheck& c : r.position_checks) {
+    position_checks.push_back({{"distance_px", c.distance_px},
+                               {"test", c.criterion},
+                               {"heldout_gain", c.gain},
+                               {"heldout_gain_error", c.gain_error},
+                               {"refused", c.refused}});
+  }
   nlohmann::json passes = nlohmann::json::array();
   for (const near::NearPass& p : r.passes) {
     passes.push_back({{"normals_moved_deg", p.change_deg}, {"seconds", p.seconds}});
@@ -186,6 +195,7 @@ nlohmann::json EffectiveDistanceJson(const near::EffectiveDistanceResult& r) {
            std::isnan(r.model_loss) ? nlohmann::json() : nlohmann::json(r.model_loss)},
           {"model_loss_error",
            std::isnan(r.model_loss_error) ? nlohmann::json() : nlohmann::json(r.model_loss_error)},
+          {"position_checks", position_checks},
           {"candidates", candidates},
           {"passes", passes},
           {"distant_seconds", r.distant_seconds},

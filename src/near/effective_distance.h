@@ -35,6 +35,24 @@ struct DistanceCandidate {
   std::string criterion;     // "model" (the plan's) or "diffuse" (Lambert, highlights censored)
 };
 
+// Nearness is a property of where the surface's points are. At the distance a test proposes,
+// the same lights are also set round points made from the normals alone: the least-squares fit
+// X ≈ a + s·N of the surface's points over the sample (on a sphere the surface itself). The
+// fall-off of near lights depends on where points are; a gain made of a fit's misfit — a lobe's
+// tails a Phong lobe cannot take, a diffuse term of another shape — depends on which way they
+// face, and points placed by their normals predict it as well or better. Both fits that ran are
+// compared at the proposed D and the more significant decides: refused where it has the normals'
+// points predicting better beyond one paired standard error.
+struct PositionCheck {
+  double distance_px = 0;
+  std::string criterion;  // the fit compared: "model" (the object's) or "diffuse"
+  // Held-out cost (t² per pixel) with the points placed by their normals less with the surface's
+  // own, and its paired standard error: positive where the positions explain the gain.
+  double gain = 0;
+  double gain_error = 0;
+  bool refused = false;  // the proposal at distance_px refused (the same for both fits' checks)
+};
+
 struct EffectiveDistanceOptions {
   solve::NormalOptions normals;
   // > 0: this D (pixels) instead of choosing one; infinity: the distant solve alone.
@@ -64,6 +82,9 @@ struct EffectiveDistanceResult {
   // its standard error (the D is refused when the loss exceeds it); NaN when not asked.
   double model_loss = std::numeric_limits<double>::quiet_NaN();
   double model_loss_error = std::numeric_limits<double>::quiet_NaN();
+  // Every proposal's PositionCheck, in the order made (the diffuse test's D checked with the
+  // object's model too).
+  std::vector<PositionCheck> position_checks;
   bool chosen = false;  // false: given (distance_px), not chosen
   std::vector<NearPass> passes;
   ImageF height;  // 1 channel: the last surface's heights in pixels (NaN outside), finite D only

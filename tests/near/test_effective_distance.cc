@@ -41,8 +41,8 @@ void ExpectSame(const ImageF& banded, const ImageF& whole, const char* what) {
 }
 
 // A glossy sphere under a dome of 24 lights at 3 object sizes, seen orthographically and read
-// with directions only (the case the effective distance is for): D is chosen, passes run, and
-// bands change nothing.
+// with directions only (the case the effective distance is for): D is chosen, the surface's points
+// explain its gain, passes run, and bands change nothing.
 TEST(EffectiveDistance, InBandsEqualsTheWholeBitForBit) {
   NearScene s;
   s.width = 44;
@@ -61,6 +61,10 @@ TEST(EffectiveDistance, InBandsEqualsTheWholeBitForBit) {
   const EffectiveDistanceResult whole = SolveEffectiveDistance(data, options);
   ASSERT_TRUE(std::isfinite(whole.distance_px));
   ASSERT_FALSE(whole.passes.empty());
+  // The lights are near: at the D chosen the surface's points predict held-out lights better than
+  // points placed by their normals (near::PositionCheck), by both fits.
+  ASSERT_FALSE(whole.position_checks.empty());
+  for (const PositionCheck& check : whole.position_checks) EXPECT_FALSE(check.refused);
 
   for (int band_rows : {5, 40}) {
     SCOPED_TRACE(band_rows);
@@ -72,6 +76,10 @@ TEST(EffectiveDistance, InBandsEqualsTheWholeBitForBit) {
     const EffectiveDistanceResult banded =
         SolveEffectiveDistanceInBands(source, band_rows, options);
     EXPECT_EQ(banded.distance_px, whole.distance_px);
+    ASSERT_EQ(banded.position_checks.size(), whole.position_checks.size());
+    for (std::size_t i = 0; i < whole.position_checks.size(); ++i) {
+      EXPECT_EQ(banded.position_checks[i].gain, whole.position_checks[i].gain);
+    }
     EXPECT_EQ(banded.passes.size(), whole.passes.size());
     EXPECT_EQ(banded.normals.model, whole.normals.model);
     EXPECT_EQ(banded.normals.shininess, whole.normals.shininess);
