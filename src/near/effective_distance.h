@@ -13,7 +13,9 @@
 // censored (the diffuse fall-off, which a broad lobe can imitate). In each the lowest wins,
 // refined by golden section between its neighbours; D = ∞ is kept unless one of them predicts
 // better by more than one paired standard error (the more significant one then decides): a
-// truly distant capture is left as it is.
+// truly distant capture is left as it is. A proposed D stands only where the surface's points
+// predict better than points placed by their normals (PositionCheck): near lights act by where
+// points are, a fit's misfit by which way they face.
 // With a finite D the model is chosen again (warm) with its lights, and the loop refines every
 // pixel from its distant normal, integrating and refining until the normals settle.
 #pragma once
