@@ -10,9 +10,11 @@
 
 #include "arrays.h"
 #include "bindings.h"
+#include "io/image_io.h"
 #include "solve/few_images.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
+#include "solve/reading_check.h"
 
 namespace py = pybind11;
 
@@ -252,6 +254,41 @@ solve::NormalResult ResultFromMaps(const py::object& maps_in, bool specular, boo
 }
 
 void BindSolve(py::module_& m) {
+  m.def(
+      "compare_encodings",
+      [](const py::object& images_in, const py::object& light_directions,
+         const py::object& light_intensities, const py::object& mask, int threads) {
+        const FloatStack images = ToImageStack(images_in);
+        const std::size_t k = images.shape(0);
+        const solve::PhotometricData data = ToObservations(
+            images, ToDirections(light_directions, k), Intensities(light_intensities, k), mask);
+        solve::ModelChoiceSettings settings;
+        settings.threads = threads;
+        solve::ReadingComparison c;
+        {
+          py::gil_scoped_release release;
+          c = solve::CompareReadings(
+              data,
+              [](double v) { return static_cast<double>(io::SrgbToLinear(static_cast<float>(v))); },
+              settings);
+        }
+        return py::dict(py::arg("heldout_cost_as_given") = c.cost_as_given,
+                        py::arg("heldout_cost_srgb") = c.cost_reread, py::arg("gain") = c.gain,
+                        py::arg("gain_error") = c.gain_error,
+                        py::arg("srgb_better") = c.reread_better, py::arg("pixels") = c.pixels,
+                        py::arg("seconds") = c.seconds);
+      },
+      py::arg("images"), py::arg("light_directions"), py::arg("light_intensities") = py::none(),
+      py::arg("mask") = py::none(), py::arg("threads") = 0,
+      R"doc(Whether images read as linear were display-encoded (`iphong normals` asks this of
+files that state no colour space): a Lambertian fit with highlights censored predicts held-out
+lights with the values as given and decoded by the sRGB curve, on the model choice's pixels.
+images (K, H, W, 3) with values in [0, 1] as read, K >= 6. Returns heldout_cost_as_given and
+heldout_cost_srgb (per pixel, in units of its censoring threshold squared), gain (as given less
+sRGB) and its paired standard error gain_error, srgb_better (gain beyond 3 standard errors: pass
+encoding="srgb" to load_dataset), pixels and seconds. Raises ValueError with fewer than 6
+images.)doc");
+
   m.def(
       "plan_sample_indices",
       [](std::size_t masked_pixels, std::size_t plan_sample) {

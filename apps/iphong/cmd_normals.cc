@@ -23,6 +23,7 @@
 #include "iphong/normals_command.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
+#include "solve/reading_check.h"
 
 namespace iphong::cli {
 
@@ -49,6 +50,43 @@ nlohmann::json FrameCheckJson(const integrate::FrameCheckResult& r) {
   return {{"better", integrate::PlaneReadingName(r.better)},
           {"silhouette_pixels", r.silhouette_pixels},
           {"readings", readings}};
+}
+
+nlohmann::json CheckEncoding(const NormalsCommandOptions& o, const io::Dataset& dataset,
+                             const solve::PhotometricData& data,
+                             const solve::NormalOptions& options) {
+  if (!dataset.encoding.assumed || data.images < 6 || data.pixel_count() == 0) return nullptr;
+  solve::ModelChoiceSettings settings;
+  settings.fit.saturation = options.saturation;
+  settings.fit.shadow_threshold = options.shadow_threshold;
+  settings.sample = options.model_sample;
+  settings.threads = o.common.threads;
+  const solve::ReadingComparison c = solve::CompareReadings(
+      data, [](double v) { return static_cast<double>(io::SrgbToLinear(static_cast<float>(v))); },
+      settings);
+  const bool display = c.reread_better;
+  char text[480];
+  std::snprintf(text, sizeof text,
+                "the images state no colour space and were read as linear, but decoded as sRGB "
+                "(display-encoded) a Lambertian fit predicts held-out photos %s (held-out cost "
+                "%.3g against %.3g, %.1f standard errors)",
+                display ? "better" : "worse", c.cost_reread, c.cost_as_given,
+                c.gain_error > 0 ? std::abs(c.gain) / c.gain_error : 0.0);
+  if (display) {
+    Warn(o.dataset + ": " + text +
+         ": if they were saved for a screen (a renderer's or an editor's PNG), pass --encoding "
+         "srgb; --encoding linear keeps this reading without the check");
+  } else {
+    Say(o.common, "Encoding: linear kept; %s (%.2f s)\n", text, c.seconds);
+  }
+  return {{"encoding", "linear"},
+          {"srgb_better", display},
+          {"heldout_cost_linear", c.cost_as_given},
+          {"heldout_cost_srgb", c.cost_reread},
+          {"gain", c.gain},
+          {"gain_error", c.gain_error},
+          {"pixels", c.pixels},
+          {"seconds", c.seconds}};
 }
 
 std::optional<integrate::FrameCheckResult> CheckLightFrame(const NormalsCommandOptions& o,
@@ -192,6 +230,7 @@ void RunNormals(const NormalsCommandOptions& o) {
     loaded.observations.light_intensities = estimated->light_intensities;
   }
   const solve::PhotometricData& data = loaded.observations;  // masked pixels only
+  const nlohmann::json encoding_check = CheckEncoding(o, dataset, data, options);
 
   // One or two images: the per-pixel problem is ambiguous and the library solves it globally
   // with priors, which needs the coefficients, kd included.
@@ -281,6 +320,7 @@ void RunNormals(const NormalsCommandOptions& o) {
     }
   }
   if (frame) metrics["frame_check"] = FrameCheckJson(*frame);
+  if (!encoding_check.is_null()) metrics["encoding_check"] = encoding_check;
   metrics["dark_pixels"] = result.summary.dark_pixels;
   metrics["underdetermined_pixels"] = result.summary.underdetermined_pixels;
   metrics["material"] = MaterialLabel(options, result);

@@ -78,6 +78,13 @@ std::optional<integrate::FrameCheckResult> CheckLightFrame(const NormalsCommandO
                                                            const Mask& with_normal);
 nlohmann::json FrameCheckJson(const integrate::FrameCheckResult& r);
 
+// Files that state no colour space were read as linear (io::EncodingChoice::assumed): whether the
+// data agree (solve/reading_check.h), a warning when decoding them as sRGB predicts held-out
+// photos clearly better. metrics.json's "encoding_check", or null when not asked.
+nlohmann::json CheckEncoding(const NormalsCommandOptions& o, const io::Dataset& dataset,
+                             const solve::PhotometricData& data,
+                             const solve::NormalOptions& options);
+
 // The solver's options from the command's flags and the capture's material.json.
 solve::NormalOptions NormalOptionsFor(const NormalsCommandOptions& o, const io::Dataset& d);
 

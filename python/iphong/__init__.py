@@ -176,6 +176,19 @@ estimate_intensities.__doc__ = _core.estimate_intensities.__doc__
 
 
 @_short_type_errors
+def compare_encodings(images, light_directions, light_intensities=None, mask=None, *args,
+                      encoding=None, **kwargs):
+    images = _image_stack(images, len(light_directions), encoding)
+    return _core.compare_encodings(images, light_directions, light_intensities, mask, *args,
+                                   **kwargs)
+
+
+compare_encodings.__doc__ = _core.compare_encodings.__doc__ + """
+
+images may also be integers (uint8, uint16) with encoding='linear' (scaled to [0, 1])."""
+
+
+@_short_type_errors
 def fit_material(images, light_directions, normals, *args, encoding=None, **kwargs):
     images = _image_stack(images, len(light_directions), encoding)
     return _core.fit_material(images, light_directions, normals, *args, **kwargs)
@@ -305,6 +318,7 @@ __all__ = [
     "angular_error",
     "calibrate_lights",
     "check_normal_frame",
+    "compare_encodings",
     "estimate_intensities",
     "estimate_normals",
     "fit_material",

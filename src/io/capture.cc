@@ -451,8 +451,10 @@ EncodingChoice ChooseEncoding(const CaptureFiles& files, const CaptureOptions& o
   if (first.is_float) return {Encoding::kLinear, what + " (float)"};
   if (first.stated) return {first.encoding, what + " states it (" + first.statement + ")"};
   // 16-bit files are raw camera data far more often than pictures made for a screen.
-  return {Encoding::kLinear, what + " states no colour space" +
-                                 (first.bits <= 8 ? "; --encoding srgb if display-encoded" : "")};
+  return {Encoding::kLinear,
+          what + " states no colour space" +
+              (first.bits <= 8 ? "; --encoding srgb if display-encoded" : ""),
+          true};
 }
 
 }  // namespace iphong::io

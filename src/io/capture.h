@@ -83,6 +83,9 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
 struct EncodingChoice {
   Encoding encoding = Encoding::kLinear;
   std::string reason;
+  // Linear by default, for integer files that state nothing: what the data say is worth asking
+  // (solve/reading_check.h).
+  bool assumed = false;
 };
 EncodingChoice ChooseEncoding(const CaptureFiles& files, const CaptureOptions& options,
                               const StoredEncoding& first_image);
