@@ -245,13 +245,8 @@ def ggx_dome(roughness=0.3, f0=0.9, sigma=0.002):
     """test_normals_surfaces' ripple dome and 24 distant lights, shaded by a GGX microfacet lobe
     (Trowbridge-Reitz with Schlick's Fresnel and Smith's shadowing, as Blender and Mitsuba shade)
     written here in numpy: a lobe whose long tails no Phong lobe takes."""
-    from test_normals_surfaces import SIZE, lights, surface
-    zx, zy, mask = surface("dome")
-    n = np.stack([-zx, -zy, np.ones_like(zx)], -1)
-    n /= np.linalg.norm(n, axis=-1, keepdims=True)
-    c = (np.arange(SIZE) + 0.5) / SIZE
-    cx, cy = np.meshgrid(c, c)
-    kd = np.stack([0.5 + 0.3 * np.sin(6 * cx), 0.4 + 0.25 * np.cos(5 * cy), 0.3 + 0.2 * np.sin(4 * (cx + cy))], -1)
+    from test_normals_surfaces import lights, scene
+    n, mask, kd = scene("dome")
     directions, intensities = lights()
     a2, k, view = roughness ** 2, roughness / 2, np.array([0.0, 0.0, 1.0])
     images = []

@@ -56,13 +56,19 @@ def surface(name):
     raise ValueError(name)
 
 
-def render(name, sigma=0.0, seed=0):
+def scene(name):
+    """The surface's unit normals, its mask and a spatially varying albedo (H, W, 3)."""
     zx, zy, mask = surface(name)
     n = np.stack([-zx, -zy, np.ones_like(zx)], -1)
     n /= np.linalg.norm(n, axis=-1, keepdims=True)
     c = (np.arange(SIZE) + 0.5) / SIZE
     cx, cy = np.meshgrid(c, c)
     kd = np.stack([0.5 + 0.3 * np.sin(6 * cx), 0.4 + 0.25 * np.cos(5 * cy), 0.3 + 0.2 * np.sin(4 * (cx + cy))], -1)
+    return n, mask, kd
+
+
+def render(name, sigma=0.0, seed=0):
+    n, mask, kd = scene(name)
     directions, intensities = lights()
     images = []
     for l, e in zip(directions, intensities):
