@@ -77,8 +77,8 @@ void AddCaptureOptions(CLI::App* cmd, CaptureFlags& f) {
                   "Mask picture, nonzero = object (default: mask.png, mask.*, NAME.mask.*, "
                   "NAME_mask.*; else the whole image)");
   cmd->add_option("--encoding", f.options.encoding,
-                  "How the image values are encoded: auto (what the files state, else linear), "
-                  "linear, srgb")
+                  "How the image values are encoded: auto (what the files state, else linear; "
+                  "normals warns when the data look display-encoded), linear, srgb")
       ->check(CLI::IsMember({"auto", "linear", "srgb"}))
       ->capture_default_str();
   cmd->add_option("--crop", f.crop,
