@@ -272,22 +272,24 @@ void BindSolve(py::module_& m) {
               [](double v) { return static_cast<double>(io::SrgbToLinear(static_cast<float>(v))); },
               settings);
         }
-        return py::dict(py::arg("heldout_cost_as_given") = c.cost_as_given,
-                        py::arg("heldout_cost_srgb") = c.cost_reread, py::arg("gain") = c.gain,
-                        py::arg("gain_error") = c.gain_error,
-                        py::arg("srgb_better") = c.reread_better, py::arg("pixels") = c.pixels,
-                        py::arg("seconds") = c.seconds);
+        return py::dict(
+            py::arg("heldout_cost_as_given") = c.cost_as_given,
+            py::arg("heldout_cost_srgb") = c.cost_reread, py::arg("loglik_gain") = c.gain,
+            py::arg("loglik_gain_error") = c.gain_error, py::arg("srgb_better") = c.reread_better,
+            py::arg("pixels") = c.pixels, py::arg("seconds") = c.seconds);
       },
       py::arg("images"), py::arg("light_directions"), py::arg("light_intensities") = py::none(),
       py::arg("mask") = py::none(), py::arg("threads") = 0,
       R"doc(Whether images read as linear were display-encoded (`iphong normals` asks this of
 files that state no colour space): a Lambertian fit with highlights censored predicts held-out
-lights with the values as given and decoded by the sRGB curve, on the model choice's pixels.
-images (K, H, W, 3) with values in [0, 1] as read, K >= 6. Returns heldout_cost_as_given and
-heldout_cost_srgb (per pixel, in units of its censoring threshold squared), gain (as given less
-sRGB) and its paired standard error gain_error, srgb_better (gain beyond 3 standard errors: pass
-encoding="srgb" to load_dataset), pixels and seconds. Raises ValueError with fewer than 6
-images.)doc");
+lights with the values as given and decoded by the sRGB curve, on the model choice's pixels, and
+the two readings are compared as likelihoods of the same recorded values (the curve's Jacobian
+included, as Box and Cox compare transforms). images (K, H, W, 3) with values in [0, 1] as read,
+K >= 6. Returns heldout_cost_as_given and heldout_cost_srgb (mean per pixel, in units of its
+censoring threshold squared), loglik_gain (per pixel, the sRGB reading's held-out log-likelihood
+less the values') and its paired standard error loglik_gain_error, srgb_better (the gain beyond 3
+standard errors: load them with encoding="srgb"), pixels and seconds. Raises ValueError with
+fewer than 6 images.)doc");
 
   m.def(
       "plan_sample_indices",

@@ -65,26 +65,30 @@ nlohmann::json CheckEncoding(const NormalsCommandOptions& o, const io::Dataset& 
       data, [](double v) { return static_cast<double>(io::SrgbToLinear(static_cast<float>(v))); },
       settings);
   const bool display = c.reread_better;
-  char text[480];
-  std::snprintf(text, sizeof text,
-                "the images state no colour space and were read as linear, but decoded as sRGB "
-                "(display-encoded) a Lambertian fit predicts held-out photos %s (held-out cost "
-                "%.3g against %.3g, %.1f standard errors)",
-                display ? "better" : "worse", c.cost_reread, c.cost_as_given,
-                c.gain_error > 0 ? std::abs(c.gain) / c.gain_error : 0.0);
+  const double z = c.gain_error > 0 ? std::abs(c.gain) / c.gain_error : 0.0;
   if (display) {
+    char text[480];
+    std::snprintf(text, sizeof text,
+                  "the images state no colour space and were read as linear, but a Lambertian "
+                  "fit finds them more likely decoded as sRGB (display-encoded): held-out "
+                  "log-likelihood %+.3g +- %.2g per pixel, %.1f standard errors",
+                  c.gain, c.gain_error, z);
     Warn(o.dataset + ": " + text +
          ": if they were saved for a screen (a renderer's or an editor's PNG), pass --encoding "
          "srgb; --encoding linear keeps this reading without the check");
   } else {
-    Say(o.common, "Encoding: linear kept; %s (%.2f s)\n", text, c.seconds);
+    Say(o.common,
+        "Encoding: linear kept (the files state no colour space; decoded as sRGB the photos are "
+        "less likely: held-out log-likelihood %+.3g +- %.2g per pixel, %.1f standard errors, "
+        "%.2f s)\n",
+        c.gain, c.gain_error, z, c.seconds);
   }
   return {{"encoding", "linear"},
           {"srgb_better", display},
           {"heldout_cost_linear", c.cost_as_given},
           {"heldout_cost_srgb", c.cost_reread},
-          {"gain", c.gain},
-          {"gain_error", c.gain_error},
+          {"loglik_gain_srgb", c.gain},
+          {"loglik_gain_error", c.gain_error},
           {"pixels", c.pixels},
           {"seconds", c.seconds}};
 }

@@ -1,7 +1,7 @@
 """Photos saved for a screen (the sRGB curve) in files that state no colour space are read as
 linear, as raw camera data and benchmarks mostly are; the data then say which reading is right
-(solve/reading_check.h): a warning that names --encoding srgb when decoding predicts held-out
-photos clearly better, nothing but a log line when the linear reading is the better one. The
+(solve/reading_check.h): a warning that names --encoding srgb when the photos are clearly more
+likely decoded, nothing but a log line when the linear reading is the more likely one. The
 photos are a matte sphere shaded here in numpy and written as bare 8-bit PNG (no gAMA, sRGB or
 iCCP chunk), as a renderer or an editor may write them."""
 import json
@@ -56,10 +56,10 @@ def test_display_encoded_photos_read_as_linear_are_named(tmp_path):
     folder = capture(tmp_path / "srgb", True)
     code, _, err = run("normals", folder, "-o", tmp_path / "out")
     assert code == 0, err
-    assert "decoded as sRGB (display-encoded) a Lambertian fit predicts held-out photos better" in err, err
+    assert "a Lambertian fit finds them more likely decoded as sRGB (display-encoded)" in err, err
     assert "pass --encoding srgb" in err
     check = json.loads((tmp_path / "out" / "metrics.json").read_text())["encoding_check"]
-    assert check["srgb_better"] and check["gain"] > 10 * check["gain_error"], check
+    assert check["srgb_better"] and check["loglik_gain_srgb"] > 10 * check["loglik_gain_error"], check
     # Told the encoding: no check, no warning.
     code, _, err = run("normals", folder, "-o", tmp_path / "told", "--encoding", "srgb")
     assert code == 0 and "display-encoded" not in err, err
@@ -73,4 +73,4 @@ def test_linear_photos_keep_their_reading_quietly(tmp_path):
     assert "display-encoded" not in err, err
     assert "Encoding: linear kept" in out, out
     check = json.loads((tmp_path / "out" / "metrics.json").read_text())["encoding_check"]
-    assert not check["srgb_better"] and check["gain"] < -10 * check["gain_error"], check
+    assert not check["srgb_better"] and check["loglik_gain_srgb"] < -10 * check["loglik_gain_error"], check
