@@ -127,6 +127,12 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
     }
     (pass == 1 ? progress : fit)->Count(rows);
   };
+  // The encoding check on the plan sample, as the in-memory run makes it on the whole capture's
+  // spread sample (the same pixels when the capture holds fewer than the plan sample).
+  nlohmann::json encoding_check;
+  band_progress.sample = [&](const solve::PhotometricData& sample) {
+    if (encoding_check.is_null()) encoding_check = CheckEncoding(o, dataset, sample, options);
+  };
   // The field averaged over f×f blocks for the light file's frame check: the whole capture's
   // normals are never in memory at once here.
   const int f = std::max(1, (std::max(width, height) + 255) / 256);
@@ -241,6 +247,7 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
   metrics["images"] = k;
   metrics["model"] = reflectance::LobeName(result.model);
   if (frame) metrics["frame_check"] = FrameCheckJson(*frame);
+  if (!encoding_check.is_null()) metrics["encoding_check"] = encoding_check;
   if (!effective_json.is_null()) metrics["effective_distance"] = effective_json;
   metrics["bands"] = {
       {"rows", band_rows},

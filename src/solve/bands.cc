@@ -114,6 +114,7 @@ NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
     }
   };
   if (planned) check_count();
+  if (planned && progress.sample) progress.sample(sampled);
   const double sample_seconds = SecondsSince(start);
   NormalPlan plan;
   if (planned) plan = PlanNormals(sampled, options);

@@ -28,6 +28,9 @@ struct BandProgress {
   // Called with the pass (1: drawing the plan sample, 2: fitting; 3, 4, ...: the effective light
   // distance's near passes, near/effective_distance.h) and the rows done.
   std::function<void(int pass, int rows_done)> rows;
+  // Called once with the plan sample's observations when pass 1 has drawn them, before the plan
+  // is made: what a check of the whole capture (the CLI's encoding check) can read of it.
+  std::function<void(const PhotometricData& sample)> sample;
 };
 
 // Calls `write(y0, band)` for each band in order, band the results of rows [y0, y0 + rows) as

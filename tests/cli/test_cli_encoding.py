@@ -60,6 +60,11 @@ def test_display_encoded_photos_read_as_linear_are_named(tmp_path):
     assert "pass --encoding srgb" in err
     check = json.loads((tmp_path / "out" / "metrics.json").read_text())["encoding_check"]
     assert check["srgb_better"] and check["loglik_gain_srgb"] > 10 * check["loglik_gain_error"], check
+    # In bands of rows the check reads the plan sample, here every pixel: the same figures.
+    code, _, err = run("normals", folder, "-o", tmp_path / "bands", "--band-rows", "16")
+    assert code == 0 and "more likely decoded as sRGB" in err, err
+    banded = json.loads((tmp_path / "bands" / "metrics.json").read_text())["encoding_check"]
+    assert banded["loglik_gain_srgb"] == check["loglik_gain_srgb"], (banded, check)
     # Told the encoding: no check, no warning.
     code, _, err = run("normals", folder, "-o", tmp_path / "told", "--encoding", "srgb")
     assert code == 0 and "display-encoded" not in err, err
