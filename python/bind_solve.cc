@@ -257,20 +257,21 @@ void BindSolve(py::module_& m) {
   m.def(
       "compare_encodings",
       [](const py::object& images_in, const py::object& light_directions,
-         const py::object& light_intensities, const py::object& mask, int threads) {
+         const py::object& light_intensities, const py::object& mask, double shadow_threshold,
+         int threads) {
         const FloatStack images = ToImageStack(images_in);
         const std::size_t k = images.shape(0);
         const solve::PhotometricData data = ToObservations(
             images, ToDirections(light_directions, k), Intensities(light_intensities, k), mask);
-        solve::ModelChoiceSettings settings;
-        settings.threads = threads;
+        // The settings estimate_normals runs with (its shadow threshold, the CLI's defaults).
+        solve::NormalOptions options;
+        options.shadow_threshold = shadow_threshold;
+        options.threads = threads;
+        if (std::string m = options.Validate(); !m.empty()) throw py::value_error(m);
         solve::ReadingComparison c;
         {
           py::gil_scoped_release release;
-          c = solve::CompareReadings(
-              data,
-              [](double v) { return static_cast<double>(io::SrgbToLinear(static_cast<float>(v))); },
-              settings);
+          c = solve::CompareReadings(data, io::DecodeSrgb, solve::ReadingSettings(options));
         }
         return py::dict(
             py::arg("heldout_cost_as_given") = c.cost_as_given,
@@ -279,13 +280,13 @@ void BindSolve(py::module_& m) {
             py::arg("pixels") = c.pixels, py::arg("seconds") = c.seconds);
       },
       py::arg("images"), py::arg("light_directions"), py::arg("light_intensities") = py::none(),
-      py::arg("mask") = py::none(), py::arg("threads") = 0,
+      py::arg("mask") = py::none(), py::arg("shadow_threshold") = 0.1, py::arg("threads") = 0,
       R"doc(Whether images read as linear were display-encoded (`iphong normals` asks this of
 files that state no colour space): a Lambertian fit with highlights censored predicts held-out
 lights with the values as given and decoded by the sRGB curve, on the model choice's pixels, and
 the two readings are compared as likelihoods of the same recorded values (the curve's Jacobian
 included, as Box and Cox compare transforms). images (K, H, W, 3) with values in [0, 1] as read,
-K >= 6. Returns heldout_cost_as_given and heldout_cost_srgb (mean per pixel, in units of its
+K >= 6; shadow_threshold as estimate_normals takes it. Returns heldout_cost_as_given and heldout_cost_srgb (mean per pixel, in units of its
 censoring threshold squared), loglik_gain (per pixel, the sRGB reading's held-out log-likelihood
 less the values') and its paired standard error loglik_gain_error, srgb_better (the gain beyond 3
 standard errors: load them with encoding="srgb"), pixels and seconds. Raises ValueError with

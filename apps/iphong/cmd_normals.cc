@@ -56,14 +56,8 @@ nlohmann::json CheckEncoding(const NormalsCommandOptions& o, const io::Dataset& 
                              const solve::PhotometricData& data,
                              const solve::NormalOptions& options) {
   if (!dataset.encoding.assumed || data.images < 6 || data.pixel_count() == 0) return nullptr;
-  solve::ModelChoiceSettings settings;
-  settings.fit.saturation = options.saturation;
-  settings.fit.shadow_threshold = options.shadow_threshold;
-  settings.sample = options.model_sample;
-  settings.threads = o.common.threads;
-  const solve::ReadingComparison c = solve::CompareReadings(
-      data, [](double v) { return static_cast<double>(io::SrgbToLinear(static_cast<float>(v))); },
-      settings);
+  const solve::ReadingComparison c =
+      solve::CompareReadings(data, io::DecodeSrgb, solve::ReadingSettings(options));
   const bool display = c.reread_better;
   const double z = c.gain_error > 0 ? std::abs(c.gain) / c.gain_error : 0.0;
   if (display) {

@@ -139,6 +139,8 @@ float SrgbToLinear(float encoded) {
   return x <= 0.04045f ? x / 12.92f : std::pow((x + 0.055f) / 1.055f, 2.4f);
 }
 
+double DecodeSrgb(double encoded) { return SrgbToLinear(static_cast<float>(encoded)); }
+
 void LinearizeSrgb(ImageF& image) {
   static const std::vector<float> table = [] {  // built once, read-only afterwards
     std::vector<float> t(65536);

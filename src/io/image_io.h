@@ -84,6 +84,8 @@ Mask ReadMask(const std::string& path, const MemoryLimit& memory = {});
 // The sRGB transfer curve and its inverse, on [0, 1].
 float LinearToSrgb(float linear);
 float SrgbToLinear(float encoded);
+// SrgbToLinear for a value in double (solve::CompareReadings' re-reading).
+double DecodeSrgb(double encoded);
 
 // SrgbToLinear over a whole image. Values that are 16-bit codes (k/65535, which 8-bit codes k/255
 // also are) go through a table of the 65536 exact results, one lookup instead of a pow each;

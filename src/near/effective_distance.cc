@@ -30,9 +30,11 @@ using namespace internal;
 constexpr double kDistanceGrid[] = {2, 3, 4, 6, 8, 12, 16, 24, 32};
 
 // data's observations under point lights at c + D·L_j with the intensity they have at c, seen
-// from the points of `depth` (orthographic, heights in pixels: depth = −height).
+// from the points of `depth` (orthographic, heights in pixels: depth = −height), or from
+// `points` (one per pixel) where given.
 PhotometricData NearData(const PhotometricData& data, const geometry::HeightMapFrame& frame,
-                         const std::vector<double>& depth, const Vec3d& centre, double distance) {
+                         const std::vector<double>& depth, const Vec3d& centre, double distance,
+                         const std::vector<Vec3d>* points = nullptr) {
   PhotometricData near = data;
   near.perspective = false;
   near.point_lights.clear();
@@ -41,7 +43,7 @@ PhotometricData NearData(const PhotometricData& data, const geometry::HeightMapF
         reflectance::Light::Point(centre + distance * data.light_directions[j],
                                   data.light_intensities[j] * distance * distance, true));
   }
-  near.points_cam = SurfacePoints(near, frame, depth);
+  near.points_cam = points ? *points : SurfacePoints(near, frame, depth);
   solve::SetReferenceLights(near, centre);
   return near;
 }
@@ -325,8 +327,7 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
         if (!test.run) continue;
         if (surface_costs[t].empty()) surface_costs[t] = test_costs(test, d).first;
         const char* criterion = t ? "diffuse" : "model";
-        PhotometricData placed = NearData(sub, frame, sub_depth, centre, d);
-        placed.points_cam = normal_points;
+        const PhotometricData placed = NearData(sub, frame, sub_depth, centre, d, &normal_points);
         solve::ModelCandidate m = test.model;
         const std::vector<double> c =
             solve::PixelHeldOutCosts(placed, m, sample, fold, test.settings);

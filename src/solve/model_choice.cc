@@ -52,7 +52,7 @@ std::pair<double, double> PairedDifference(const double* a, const double* b, std
   double count = 0, sum = 0, sq = 0;
   for (std::size_t i = 0; i < n; ++i) {
     if (use && use[i] == 0) continue;
-    const double d = a[i] - b[i];
+    const double d = b ? a[i] - b[i] : a[i];
     count += 1, sum += d, sq += d * d;
   }
   if (count == 0) return {0.0, 0.0};

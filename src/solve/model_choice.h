@@ -61,7 +61,7 @@ int FoldCount(int lights);
 std::vector<int> LightFolds(int lights);
 
 // The mean of a_i − b_i over the n entries (those where use[i] ≠ 0, with `use`) and its standard
-// error, the entries taken as independent; {0, 0} for none.
+// error, the entries taken as independent; {0, 0} for none. Without `b`, the mean of a itself.
 std::pair<double, double> PairedDifference(const double* a, const double* b, std::size_t n,
                                            const double* use = nullptr);
 

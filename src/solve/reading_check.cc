@@ -38,6 +38,15 @@ double LogJacobian(const PhotometricData& data, std::size_t i, const double* usa
 
 }  // namespace
 
+ModelChoiceSettings ReadingSettings(const NormalOptions& options) {
+  ModelChoiceSettings settings;
+  settings.fit.saturation = options.saturation;
+  settings.fit.shadow_threshold = options.shadow_threshold;
+  settings.sample = options.model_sample;
+  settings.threads = options.threads;
+  return settings;
+}
+
 ReadingComparison CompareReadings(const PhotometricData& data,
                                   const std::function<double(double)>& reread,
                                   const ModelChoiceSettings& settings) {
@@ -93,8 +102,7 @@ ReadingComparison CompareReadings(const PhotometricData& data,
   out.pixels = gain.size();
   out.cost_as_given = given_model.heldout_cost;
   out.cost_reread = reread_model.heldout_cost;
-  const std::vector<double> zero(gain.size(), 0.0);
-  std::tie(out.gain, out.gain_error) = PairedDifference(gain.data(), zero.data(), gain.size());
+  std::tie(out.gain, out.gain_error) = PairedDifference(gain.data(), nullptr, gain.size());
   out.reread_better = out.gain > kReadingStandardErrors * out.gain_error;
   out.seconds = SecondsSince(start);
   return out;

@@ -21,6 +21,7 @@
 #include <functional>
 
 #include "solve/model_choice.h"
+#include "solve/normals.h"
 #include "solve/photometric_data.h"
 
 namespace iphong::solve {
@@ -43,6 +44,10 @@ struct ReadingComparison {
   bool reread_better = false;  // gain > kReadingStandardErrors · gain_error
   double seconds = 0;
 };
+
+// The settings a run with `options` compares readings with: its saturation level, shadow
+// threshold, model-choice sample and threads.
+ModelChoiceSettings ReadingSettings(const NormalOptions& options);
 
 // `reread` maps a recorded value (in [0, 1] for integer codes) to the value it stands for under
 // the other reading; it must increase. `settings.fit` gives the saturation level and shadow

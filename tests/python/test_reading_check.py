@@ -56,3 +56,16 @@ def test_too_few_images_raise_value_error():
     lights = np.array([[0, 0, 1], [0.5, 0, 0.87], [0, 0.5, 0.87], [-0.5, 0, 0.87], [0, -0.5, 0.87]])
     with pytest.raises(ValueError, match="6 images"):
         iphong.compare_encodings(images, lights)
+
+
+def test_the_shadow_threshold_is_the_one_given():
+    lights = np.array([[0, 0, 1], [0.5, 0, 0.87], [0, 0.5, 0.87], [-0.5, 0, 0.87], [0, -0.5, 0.87],
+                       [0.4, 0.4, 0.82]])
+    with pytest.raises(ValueError, match="shadow threshold"):
+        iphong.compare_encodings(np.full((6, 8, 8, 3), 0.5, np.float32), lights, shadow_threshold=0)
+    d, args = load("diligent-crop8/pot1")
+    default = iphong.compare_encodings(d["images"], *args)
+    wider = iphong.compare_encodings(d["images"], *args, shadow_threshold=0.3)
+    # The costs are in units of each pixel's t², t the threshold's fraction of its brightness.
+    assert wider["heldout_cost_as_given"] < 0.5 * default["heldout_cost_as_given"], (default, wider)
+    assert not wider["srgb_better"], wider
