@@ -347,6 +347,14 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
       c.lights_format += " with positions (near lights)";
     }
   }
+  // A camera file beside light directions (a renderer's perspective camera and sun lamps) is not
+  // used: said, so the user does not take the view for a perspective one.
+  if (options.lights_needed && !c.near.present() && Exists(dir / "camera.json")) {
+    c.warnings.push_back((dir / "camera.json").string() +
+                         ": not read: a camera is read with light_positions.txt (near lights); "
+                         "under light directions every pixel is seen along the optical axis "
+                         "(V = (0, 0, 1), an orthographic view)");
+  }
   if (c.paths.empty()) {
     for (const std::string& name : c.names) c.paths.push_back((dir / name).string());
   }

@@ -50,6 +50,22 @@ def uw_as_diligent(obj, folder, order):
     return folder
 
 
+def test_a_camera_beside_light_directions_is_said_not_read(tmp_path):
+    plain = uw_as_diligent("cat", tmp_path / "plain", range(12))
+    normals(plain, tmp_path / "plain-out")
+    with_camera = uw_as_diligent("cat", tmp_path / "camera", range(12))
+    (with_camera / "camera.json").write_text('{"fx": 800, "fy": 800, "cx": 256, "cy": 256}\n')
+    code, _, stderr = run("normals", with_camera, "-o", tmp_path / "camera-out", timeout=300)
+    assert code == 0, stderr
+    assert "camera.json: not read: a camera is read with light_positions.txt" in stderr
+    assert "(V = (0, 0, 1), an orthographic view)" in stderr
+    assert angle_between(tmp_path / "plain-out" / "normals.exr",
+                         tmp_path / "camera-out" / "normals.exr") < 1e-6
+    # Without the file, no such line.
+    code, _, stderr = run("normals", plain, "-o", tmp_path / "again", timeout=300)
+    assert code == 0 and "camera.json" not in stderr, stderr
+
+
 def test_uw_cat_runs_as_it_is_and_says_what_it_read(tmp_path):
     stdout, metrics = normals(UW / "cat", tmp_path / "out")
     line = stdout.splitlines()[0]
