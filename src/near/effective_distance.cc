@@ -251,9 +251,7 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
       test.settings.threads = o.normals.threads;
       test.settings.starts = &starts;
       if (diffuse) {
-        test.model.lobe = reflectance::Lobe::kLambert;
-        test.model.ks_prior_weight = 0;
-        test.settings.fit.censor_bright = true;
+        solve::MakeDiffuseTest(test.model, test.settings);
       } else if (test.model.lobe == reflectance::Lobe::kLambert) {
         continue;  // the same test as the diffuse one, less robust
       }

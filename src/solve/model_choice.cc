@@ -60,6 +60,15 @@ std::pair<double, double> PairedDifference(const double* a, const double* b, std
   return {mean, std::sqrt(std::max(0.0, sq / count - mean * mean) / count)};
 }
 
+void MakeDiffuseTest(ModelCandidate& model, ModelChoiceSettings& settings) {
+  model.lobe = reflectance::Lobe::kLambert;
+  model.ks_prior_weight = 0;
+  settings.fit.model.lobe = reflectance::Lobe::kLambert;
+  settings.fit.ks_prior.reset();
+  settings.fit.censor_bright = true;
+  settings.fit.shading_weights = {};
+}
+
 std::vector<std::size_t> SpreadIndices(std::size_t n, int count) {
   std::vector<std::size_t> out;
   if (n <= static_cast<std::size_t>(std::max(count, 0))) {

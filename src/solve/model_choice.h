@@ -96,6 +96,13 @@ struct ModelChoiceSettings {
   const std::vector<Vec3d>* starts = nullptr;
 };
 
+// Makes `model` and `settings` the diffuse test: a Lambertian fit that censors observations
+// brighter than the model by more than t as it censors darker ones (PixelFitSettings::
+// censor_bright), with no ks prior and no weights by N·L, so a lobe the model may lack (or a
+// reading that bends the shading) is left out rather than absorbed. The effective light
+// distance (near/effective_distance.h) and the reading check (reading_check.h) ask it.
+void MakeDiffuseTest(ModelCandidate& model, ModelChoiceSettings& settings);
+
 struct ModelChoice {
   ModelCandidate chosen;
   std::vector<ModelCandidate> scored;  // every model tried, in the order tried

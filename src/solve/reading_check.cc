@@ -64,14 +64,9 @@ ReadingComparison CompareReadings(const PhotometricData& data,
   const std::vector<int> fold = LightFolds(data.images);
 
   ModelCandidate lambert;
-  lambert.lobe = reflectance::Lobe::kLambert;
-  lambert.ks_prior_weight = 0;
   ModelChoiceSettings diffuse = settings;
-  diffuse.fit.model.lobe = reflectance::Lobe::kLambert;
-  diffuse.fit.ks_prior.reset();
-  diffuse.fit.censor_bright = true;
-  diffuse.fit.shading_weights = {};
-  diffuse.starts = nullptr;
+  MakeDiffuseTest(lambert, diffuse);
+  diffuse.starts = nullptr;  // both readings searched from scratch
 
   ModelCandidate given_model = lambert, reread_model = lambert;
   const std::vector<double> given = PixelHeldOutCosts(as_given, given_model, pixels, fold, diffuse);
