@@ -113,7 +113,7 @@ uniform sampler2D normals, albedo, specmap;
 uniform vec2 size;
 uniform vec3 light, intensity, ambient, ks;
 uniform float shininess, albedoScale, specScale, specular, exposure;
-uniform int lobe;          // 0 Phong, 1 Blinn-Phong, 2 Lambert
+uniform int lobe;          // 0 Phong, 1 Blinn-Phong, 2 Lambert, 3 normal-centred
 uniform bool useSpecMap;
 float decode(float c) { return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4); }
 vec3 decode3(vec3 c) { return vec3(decode(c.r), decode(c.g), decode(c.b)); }
@@ -139,6 +139,8 @@ void main() {
     } else if (lobe == 1) {
       float nh = dot(N, normalize(L + V));
       if (nh > 0.0) s = pow(nh, shininess);
+    } else if (lobe == 3) {
+      s = pow(ndl, shininess);
     }
     c += intensity * (kd * ndl + k * s);
   }
@@ -284,7 +286,8 @@ std::string ViewerPage(const render::RelightInput& input, const std::string& tit
   page = Replace(page, "@LOBE@",
                  input.lobe == reflectance::Lobe::kPhong        ? "0"
                  : input.lobe == reflectance::Lobe::kBlinnPhong ? "1"
-                                                                : "2");
+                 : input.lobe == reflectance::Lobe::kLambert    ? "2"
+                                                                : "3");
   page = Replace(page, "@MODEL@", reflectance::LobeName(input.lobe));
   page = Replace(page, "@USE_SPEC_MAP@", input.specular ? "true" : "false");
   return page;

@@ -45,8 +45,9 @@ Lobe ParseLobe(const std::string& name) {
   if (name == "phong") return Lobe::kPhong;
   if (name == "blinn-phong" || name == "blinn_phong" || name == "blinn") return Lobe::kBlinnPhong;
   if (name == "lambert") return Lobe::kLambert;
+  if (name == "normal-centred" || name == "normal_centred") return Lobe::kNormalCentred;
   throw std::invalid_argument("unknown reflectance model '" + name +
-                              "' (expected phong, blinn-phong or lambert)");
+                              "' (expected phong, blinn-phong, lambert or normal-centred)");
 }
 
 std::string LobeName(Lobe lobe) {
@@ -57,6 +58,8 @@ std::string LobeName(Lobe lobe) {
       return "blinn-phong";
     case Lobe::kLambert:
       return "lambert";
+    case Lobe::kNormalCentred:
+      return "normal-centred";
   }
   return "phong";
 }

@@ -29,6 +29,10 @@ enum class Lobe {
   kPhong,       // (R·V)^n
   kBlinnPhong,  // (N·H)^n
   kLambert,     // no specular term
+  // (N·L)^n: a sharpened diffuse term centred on the normal, not on the mirror direction. Not a
+  // reflection model: the model choice's foil, a lobe of a highlight's width that follows the
+  // normal, as irradiance fall-off or a non-Lambertian diffuse term does (solve/model_choice.h).
+  kNormalCentred,
 };
 
 // How the power of the lobe is computed.
@@ -147,6 +151,10 @@ T SpecularLobe(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam
   if (options.lobe == Lobe::kLambert) return T(0);
   const T n_dot_l = normal_cam.dot(light_dir_cam);
   if (!(n_dot_l > T(0))) return T(0);
+  if (options.lobe == Lobe::kNormalCentred) {
+    const T lambda = options.power == PowerMode::kFastApprox ? T(1) - n_dot_l : T(0);
+    return LobePower(n_dot_l, lambda, shininess, options);
+  }
   if (options.lobe == Lobe::kPhong) {
     const Vec3T<T> reflect_cam = Reflect(normal_cam, n_dot_l, light_dir_cam);
     const T cosine = reflect_cam.dot(view_cam);

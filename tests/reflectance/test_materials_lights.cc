@@ -111,7 +111,7 @@ TEST(LightValidation, LightingNamesTheBadLight) {
 }
 
 TEST(ModelNames, ParseAndPrintRoundTrip) {
-  for (Lobe lobe : {Lobe::kPhong, Lobe::kBlinnPhong, Lobe::kLambert}) {
+  for (Lobe lobe : {Lobe::kPhong, Lobe::kBlinnPhong, Lobe::kLambert, Lobe::kNormalCentred}) {
     EXPECT_EQ(ParseLobe(LobeName(lobe)), lobe);
   }
   EXPECT_THROW(ParseLobe("cook-torrance"), std::invalid_argument);

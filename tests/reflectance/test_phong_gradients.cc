@@ -230,7 +230,10 @@ INSTANTIATE_TEST_SUITE_P(
                       LobeCase{Lobe::kBlinnPhong, PowerMode::kExact, "BlinnPhongExact"},
                       LobeCase{Lobe::kPhong, PowerMode::kFastApprox, "PhongFastApprox"},
                       LobeCase{Lobe::kBlinnPhong, PowerMode::kFastApprox, "BlinnPhongFastApprox"},
-                      LobeCase{Lobe::kLambert, PowerMode::kExact, "Lambert"}),
+                      LobeCase{Lobe::kLambert, PowerMode::kExact, "Lambert"},
+                      LobeCase{Lobe::kNormalCentred, PowerMode::kExact, "NormalCentredExact"},
+                      LobeCase{Lobe::kNormalCentred, PowerMode::kFastApprox,
+                               "NormalCentredFastApprox"}),
     [](const auto& info) { return std::string(info.param.name); });
 
 }  // namespace

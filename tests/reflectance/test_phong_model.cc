@@ -104,6 +104,25 @@ TEST(PhongModel, ClosedFormLobeInPlane) {
   }
 }
 
+TEST(PhongModel, NormalCentredLobeIsTheCosinePowerWhateverTheView) {
+  // (N·L)^n: the light at θ from N gives cos^n θ from every viewer, and Phong's value only where
+  // the viewer looks along N (R·V = N·L there); nothing from behind.
+  ModelOptions foil;
+  foil.lobe = Lobe::kNormalCentred;
+  const Vec3d n(0, 0, 1);
+  for (double theta : {0.0, 0.4, 1.2}) {
+    for (double phi : {0.0, 0.3, 0.7}) {
+      for (double shininess : {1.0, 4.8, 12.8}) {
+        EXPECT_NEAR(SpecularLobe<double>(n, InPlaneXZ(phi), InPlaneXZ(theta), shininess, foil),
+                    std::pow(std::cos(theta), shininess), 1e-12);
+      }
+    }
+    EXPECT_NEAR(SpecularLobe<double>(n, n, InPlaneXZ(theta), 7.0, foil),
+                SpecularLobe<double>(n, n, InPlaneXZ(theta), 7.0, ModelOptions{}), 1e-12);
+  }
+  EXPECT_EQ(SpecularLobe<double>(n, n, InPlaneXZ(1.7), 3.0, foil), 0.0);
+}
+
 TEST(PhongModel, FullTermClosedForm) {
   const Vec3d n(0, 0, 1), l = InPlaneXZ(0.5), v = InPlaneXZ(-0.2);
   const Material m = Shiny(20);
