@@ -44,30 +44,6 @@ void Downsample(const ImageF& normals, const Mask& mask, int f, ImageF* out, Mas
   average.Result(out, out_mask);
 }
 
-// Mean angle (degrees) between the field and the normals of its least-squares surface.
-double ConsistencyDeg(const ImageF& normals, const Mask& mask, int threads) {
-  IntegrateOptions options;
-  options.method = Method::kQuadratic;
-  options.allow_back_facing = true;
-  options.threads = threads;
-  const IntegrateResult r = IntegrateNormals(normals, mask, options);
-  // The surface's own normals (a pixel per unit, orthographic): central differences, one-sided
-  // where a neighbour is missing, none where a pixel has no neighbour along an axis.
-  const ImageF back = geometry::NormalsFromHeightMap(r.height, mask, geometry::HeightMapFrame{});
-  double sum = 0;
-  std::size_t count = 0;
-  for (std::size_t p = 0; p < mask.inside.size(); ++p) {
-    const float* b = back.pixels.data() + 3 * p;
-    if (!mask.inside[p] || (b[0] == 0 && b[1] == 0 && b[2] == 0)) continue;
-    const float* n = normals.pixels.data() + 3 * p;
-    const double cos =
-        std::clamp(double(b[0]) * n[0] + double(b[1]) * n[1] + double(b[2]) * n[2], -1.0, 1.0);
-    sum += std::acos(cos) * 180 / M_PI;
-    ++count;
-  }
-  return count ? sum / count : std::numeric_limits<double>::quiet_NaN();
-}
-
 }  // namespace
 
 const char* PlaneReadingName(PlaneReading reading) {
@@ -94,6 +70,29 @@ const char* PlaneReadingName(PlaneReading reading) {
 
 Vec3f ApplyReading(PlaneReading reading, const Vec3f& v) { return Apply(reading, v); }
 Vec3d ApplyReading(PlaneReading reading, const Vec3d& v) { return Apply(reading, v); }
+
+double IntegrabilityDeg(const ImageF& normals, const Mask& mask, int threads) {
+  IntegrateOptions options;
+  options.method = Method::kQuadratic;
+  options.allow_back_facing = true;
+  options.threads = threads;
+  const IntegrateResult r = IntegrateNormals(normals, mask, options);
+  // The surface's own normals (a pixel per unit, orthographic): central differences, one-sided
+  // where a neighbour is missing, none where a pixel has no neighbour along an axis.
+  const ImageF back = geometry::NormalsFromHeightMap(r.height, mask, geometry::HeightMapFrame{});
+  double sum = 0;
+  std::size_t count = 0;
+  for (std::size_t p = 0; p < mask.inside.size(); ++p) {
+    const float* b = back.pixels.data() + 3 * p;
+    if (!mask.inside[p] || (b[0] == 0 && b[1] == 0 && b[2] == 0)) continue;
+    const float* n = normals.pixels.data() + 3 * p;
+    const double cos =
+        std::clamp(double(b[0]) * n[0] + double(b[1]) * n[1] + double(b[2]) * n[2], -1.0, 1.0);
+    sum += std::acos(cos) * 180 / M_PI;
+    ++count;
+  }
+  return count ? sum / count : std::numeric_limits<double>::quiet_NaN();
+}
 
 std::string FrameCheckOptions::Validate() const {
   if (max_side < 8) return "max_side must be at least 8";
@@ -230,7 +229,7 @@ FrameCheckResult CheckNormalFrame(const ImageF& normals_cam, const Mask& mask,
         const Vec3f t = Apply(reading, Vec3f(n[0], n[1], n[2]));
         n[0] = t.x(), n[1] = t.y(), n[2] = t.z();
       }
-      deg = ConsistencyDeg(read, small_mask, options.threads);
+      deg = IntegrabilityDeg(read, small_mask, options.threads);
     }
     result.scores[int(reading)].consistency_deg = deg;
     result.scores[int(half_turn)].consistency_deg = deg;

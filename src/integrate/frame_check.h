@@ -100,6 +100,12 @@ class NormalBlockAverage {
   std::vector<int> used_, seen_;  // pixels with a normal, pixels, per block
 };
 
+// The mean angle (degrees) between a field (unit normals, a pixel per unit, orthographic) and the
+// normals of the surface integrated from it by least squares (quadratic, back-facing allowed):
+// zero for the normals of a surface, the estimation error's non-integrable part otherwise. NaN
+// when no pixel has a neighbour.
+double IntegrabilityDeg(const ImageF& normals_cam, const Mask& mask, int threads = 0);
+
 // Throws std::invalid_argument when sizes differ or the mask holds a non-finite normal. Normals
 // need not be unit (they are normalized); zero normals are left out.
 FrameCheckResult CheckNormalFrame(const ImageF& normals_cam, const Mask& mask,
