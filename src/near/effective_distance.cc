@@ -254,6 +254,13 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
         solve::MakeDiffuseTest(test.model, test.settings);
       } else if (test.model.lobe == reflectance::Lobe::kLambert) {
         continue;  // the same test as the diffuse one, less robust
+      } else if (test.model.lobe == reflectance::Lobe::kNormalCentred) {
+        // The foil (model_choice.h) is a brightening that follows the normal, which is what a
+        // fall-off looks like from one pixel: chosen under distant lights it has taken the
+        // fall-off in and would lose at any finite D, so it cannot judge one. The diffuse test
+        // and the position check decide; at a D chosen the model is chosen again (warm) with
+        // its lights, the foil among the candidates.
+        continue;
       }
       test.run = true;
       const std::string criterion = diffuse ? "diffuse" : "model";

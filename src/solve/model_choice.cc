@@ -24,7 +24,8 @@ using internal::SharedSpecular;
 
 double LobeHalfWidthDeg(reflectance::Lobe lobe, double shininess) {
   // (R·V)^n = 1/2 at cos ψ = 2^(−1/n), ψ the angle between L and V's mirror direction. N·H
-  // turns half as fast as L, so a Blinn-Phong lobe is twice as wide in the light's angle.
+  // turns half as fast as L, so a Blinn-Phong lobe is twice as wide in the light's angle. The
+  // foil's (N·L)^n is Phong's about the normal instead of the mirror direction.
   const double psi = std::acos(std::pow(0.5, 1.0 / std::max(shininess, 1e-9))) * 180 / M_PI;
   return lobe == reflectance::Lobe::kBlinnPhong ? 2 * psi : psi;
 }
@@ -39,7 +40,7 @@ std::vector<ModelCandidate> ModelFamily(std::optional<reflectance::Lobe> only) {
   std::vector<ModelCandidate> family;
   using reflectance::Lobe;
   if (!only || *only == Lobe::kLambert) family.push_back({Lobe::kLambert, 1});
-  for (Lobe lobe : {Lobe::kPhong, Lobe::kBlinnPhong}) {
+  for (Lobe lobe : {Lobe::kPhong, Lobe::kBlinnPhong, Lobe::kNormalCentred}) {
     if (only && *only != lobe) continue;
     // Six factors of 2 from the widest lobe that is still a highlight: half widths 30° … ~4°.
     for (int i = 0; i < 6; ++i) family.push_back({lobe, MinimumShininess(lobe) * std::pow(2.0, i)});
@@ -263,7 +264,8 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
       lambert_cost = std::min(lambert_cost, choice.scored[i].heldout_cost);
     }
   }
-  for (const reflectance::Lobe lobe : {reflectance::Lobe::kPhong, reflectance::Lobe::kBlinnPhong}) {
+  for (const reflectance::Lobe lobe : {reflectance::Lobe::kPhong, reflectance::Lobe::kBlinnPhong,
+                                       reflectance::Lobe::kNormalCentred}) {
     // The lowest of this lobe's first `end` scores (in `variant`'s observations only, if given).
     // Only complete models: a lobe none of whose grid points stayed in the race is not refined.
     const auto best_of = [&](std::size_t end, const ModelCandidate* variant) {
@@ -281,6 +283,14 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
     };
     const std::optional<std::size_t> grid_best = best_of(grid_size, nullptr);
     if (!grid_best || !(choice.scored[*grid_best].heldout_cost < lambert_cost)) continue;
+    // The foil is refined only where its grid best is not clearly behind the grid's best model
+    // (one paired standard error): it is there to take what no highlight explains, and where a
+    // mirror lobe predicts clearly better on the grid a step of √2 will not turn that around.
+    if (lobe == reflectance::Lobe::kNormalCentred && leader) {
+      const auto [mean, error] =
+          PairedDifference(costs[*grid_best].data(), costs[*leader].data(), costs[*leader].size());
+      if (mean > error) continue;
+    }
     const ModelCandidate start = choice.scored[*grid_best];
     const auto evaluate = [&](double shininess) {
       ModelCandidate m = start;
@@ -306,10 +316,29 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
       held_out(m);
     }
   }
+  // The lowest complete model, among mirror lobes and Lambert only with `mirror_only`.
+  const auto is_foil = [&](std::size_t i) {
+    return choice.scored[i].lobe == reflectance::Lobe::kNormalCentred;
+  };
+  const auto lowest = [&](bool mirror_only) {
+    std::optional<std::size_t> best;
+    for (std::size_t i = 0; i < choice.scored.size(); ++i) {
+      if (complete[i] && !(mirror_only && is_foil(i)) &&
+          (!best || choice.scored[i].heldout_cost < choice.scored[*best].heldout_cost)) {
+        best = i;
+      }
+    }
+    return best;
+  };
   // How far each pixel's ks may stray from the object's: free, or pulled toward it with the
-  // weight of 1 or 10 observations of the lobe's peak, also by prediction.
-  if (const ModelCandidate lobe_best = choice.scored[*leader];
-      lobe_best.lobe != reflectance::Lobe::kLambert) {
+  // weight of 1 or 10 observations of the lobe's peak, also by prediction — for the foil's best
+  // and the mirror lobes' best when the foil leads, so the highlight weighed against it is the
+  // one the choice would make without it.
+  for (const bool mirror_only : {false, true}) {
+    const std::optional<std::size_t> at = lowest(mirror_only);
+    if (!at || (mirror_only && !is_foil(*leader))) continue;
+    const ModelCandidate lobe_best = choice.scored[*at];
+    if (lobe_best.lobe == reflectance::Lobe::kLambert) continue;
     const Vec3d shared = SharedSpecular(data, lobe_best, settings_for(lobe_best));
     for (double weight : {1.0, 10.0}) {
       ModelCandidate m = lobe_best;
@@ -324,22 +353,36 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   // fit ks ≈ 0 and tie with it) — else the one whose two halves agree best on the normal: two
   // models can predict the images equally well while one of them leaves the normal less
   // determined.
-  const std::size_t lowest_index = *leader;
   const auto preferred = [&](std::size_t i, std::size_t j) {
     const bool lambert_i = choice.scored[i].lobe == reflectance::Lobe::kLambert;
     const bool lambert_j = choice.scored[j].lobe == reflectance::Lobe::kLambert;
     if (lambert_i != lambert_j) return lambert_i;
     return choice.scored[i].fold_angle_deg < choice.scored[j].fold_angle_deg;
   };
-  std::size_t pick = lowest_index;
-  for (std::size_t i = 0; i < choice.scored.size(); ++i) {
-    if (!complete[i]) continue;
-    const auto [mean, error] =
-        PairedDifference(costs[i].data(), costs[lowest_index].data(), costs[i].size());
-    if (mean <= error && preferred(i, pick)) pick = i;
-  }
+  const auto pick_among = [&](bool mirror_only) {
+    const std::size_t lowest_index = *lowest(mirror_only);
+    std::size_t pick = lowest_index;
+    for (std::size_t i = 0; i < choice.scored.size(); ++i) {
+      if (!complete[i] || (mirror_only && is_foil(i))) continue;
+      const auto [mean, error] =
+          PairedDifference(costs[i].data(), costs[lowest_index].data(), costs[i].size());
+      if (mean <= error && preferred(i, pick)) pick = i;
+    }
+    return pick;
+  };
+  const std::size_t pick = pick_among(false);
   const ModelCandidate best = choice.scored[pick];
   choice.chosen = best;
+  // The foil predicting best says the data's departure from Lambert follows the normal, yet a
+  // highlight can predict a little worse and still be the truth: where the choice without the
+  // foil takes a mirror lobe (one that beats Lambert beyond a standard error), the plan keeps
+  // whichever of the two gives normals that make a surface (highlight_check.h).
+  if (is_foil(pick) && lowest(true)) {
+    const std::size_t mirror = pick_among(true);
+    if (choice.scored[mirror].lobe != reflectance::Lobe::kLambert) {
+      choice.highlight = choice.scored[mirror];
+    }
+  }
   const auto lambert = std::find_if(choice.scored.begin(), choice.scored.end(), [](const auto& m) {
     return m.lobe == reflectance::Lobe::kLambert;
   });

@@ -5,6 +5,16 @@
 // half's observations (internal::CensoredCost, in units of the pixel's t², so every pixel counts
 // alike), then the halves swap. The fitted cost cannot decide: a model with more freedom always
 // fits its own data better. A specular model is used only where it predicts better than Lambert.
+//
+// Beside the mirror lobes the family holds a foil: a lobe of the same widths centred on the
+// normal, (N·L)^n (reflectance::Lobe::kNormalCentred). What a broad mirror lobe gains over
+// Lambert may be no highlight at all: the fall-off of lights nearer than the file says, a
+// diffuse term sharper than the cosine, shadows and interreflections at grazing light. Such a
+// departure follows the normal, and the foil takes it without pulling the normal toward anybody's
+// mirror direction; a mirror lobe takes it by tilting the normal, pixel by pixel. So when the foil
+// predicts best, the mirror lobe is not taken as a highlight on prediction alone: where one also
+// beats Lambert, the plan keeps whichever of the two gives normals that make a surface
+// (PlanNormals: a highlight absorbed into tilted normals leaves a field that does not integrate).
 #pragma once
 
 #include <optional>
@@ -44,11 +54,12 @@ constexpr double kMaxLobeHalfWidthDeg = 30;
 
 // The half width at half maximum of a lobe, in degrees of the light's direction.
 double LobeHalfWidthDeg(reflectance::Lobe lobe, double shininess);
-// The shininess whose lobe is kMaxLobeHalfWidthDeg wide: Phong 4.8, Blinn-Phong 19.9.
+// The shininess whose lobe is kMaxLobeHalfWidthDeg wide: Phong and the foil 4.8, Blinn-Phong 19.9.
 double MinimumShininess(reflectance::Lobe lobe);
 
-// The models tried: Lambert, then each lobe from its minimum shininess up in six factors of 2
-// (half widths 30° down to about 4°). With `only` set, that lobe's alone.
+// The models tried: Lambert, then each lobe (Phong, Blinn-Phong and the normal-centred foil) from
+// its minimum shininess up in six factors of 2 (half widths 30° down to about 4°). With `only`
+// set, that lobe's alone.
 std::vector<ModelCandidate> ModelFamily(std::optional<reflectance::Lobe> only);
 
 // Cross-validation folds over the lights: each fit sees at least this many (or all but one).
@@ -112,6 +123,9 @@ struct ModelChoice {
   // every model is also scored as if the images were truncated (code_offset half of it).
   double code_step = 0;
   std::string note;
+  // Set when the foil (kNormalCentred) was chosen while a mirror lobe also beat Lambert beyond a
+  // standard error: the best such lobe, for the plan to weigh against the foil by integrability.
+  std::optional<ModelCandidate> highlight;
   // The fit's weights by N·L under the chosen model (shading_weights.h), measured by the plan
   // (PlanNormals) after the choice; empty when not measured.
   ShadingMisfit shading;

@@ -10,6 +10,7 @@
 #include "core/timing.h"
 #include "solve/assemble.h"
 #include "solve/few_images.h"
+#include "solve/highlight_check.h"
 #include "solve/internal.h"
 #include "solve/light_tiles.h"
 #include "solve/pixel_fit.h"
@@ -190,6 +191,7 @@ NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& optio
   o.shininess = plan.model_choice.chosen.shininess;
   o.ambient_term = plan.model_choice.chosen.ambient_term;
   o.code_offset = plan.model_choice.chosen.code_offset;
+  CheckHighlight(sample, plan);
   if (o.weigh_by_shading && !plan.model_choice.fold.empty()) {
     const std::vector<std::size_t> pixels = SpreadIndices(sample.pixel_count(), o.model_sample);
     std::vector<Vec3d> sub;

@@ -86,10 +86,20 @@ def test_relit_under_a_capture_light_reproduces_its_photo(capture, tmp_path):
 
 @pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (scripts/setup-debian.sh "
                                              "installs it); the viewer test needs a browser")
-def test_viewer_in_a_browser_matches_relight(capture, tmp_path):
+@pytest.mark.parametrize("model", [None, "normal-centred"])
+def test_viewer_in_a_browser_matches_relight(capture, tmp_path, model):
+    """The shader's second spelling of the model, for the lobe the choice takes (Phong here) and
+    for the foil centred on the normal, which it takes where a brightening follows the normal."""
     light = "-0.4,0.5,0.77"
+    normals = capture / "n"
+    if model:
+        normals = tmp_path / "n"
+        code, _, err = run("normals", capture / "d", "-o", normals, "--model", model,
+                           "--ignore-material")
+        assert code == 0, err
+        assert json.loads((normals / "material.json").read_text())["model"] == model
     for args, out in [([], tmp_path / "relit.png"), (["--viewer"], tmp_path / "viewer.html")]:
-        code, _, err = run("relight", capture / "n", "--light", light, *args, "-o", out)
+        code, _, err = run("relight", normals, "--light", light, *args, "-o", out)
         assert code == 0, err
     page = (tmp_path / "viewer.html").read_text()
     assert "http://" not in page and "https://" not in page  # self-contained: no network
@@ -113,7 +123,8 @@ def test_viewer_in_a_browser_matches_relight(capture, tmp_path):
     mean = sum(diffs) / len(diffs)
     print(f"viewer vs relight: mean difference {100 * mean:.3f}% over {lit} pixels")
     assert lit > 3000
-    assert mean < 0.02
+    # measured 0.094 % (Phong) and 0.101 % (the foil); the foil drawn without its lobe: 0.68 %
+    assert mean < 0.003
 
 
 def test_bad_inputs(capture, tmp_path):

@@ -164,12 +164,8 @@ def test_effective_light_distance_equals_the_whole():
     only: the in-memory run chooses an effective light distance and runs its near passes; Dask
     chooses the same on the same pixels, maps the blocks for each pass, and gives the same maps
     bit for bit (before, it kept the lights distant and differed)."""
-    scene = json.loads((pathlib.Path(__file__).parents[2] / "fixtures" / "scenes"
-                        / "near_dome_lambert.json").read_text())
-    scene.update(width=120, height=96, output={})
-    scene["camera"].update(fx=260, fy=260, cx=60, cy=48)
-    scene["objects"][0]["subdivisions"] = 5
-    out = iphong.render(scene, per_light=True)
+    from test_near_lights import small_dome_scene
+    out = iphong.render(small_dome_scene(), per_light=True)
     args = (out["light_directions"], out["light_intensities"], out["mask"])
     whole = iphong.estimate_normals(out["images"], *args)
     assert whole["effective_distance"]["distance_px"] != float("inf")
