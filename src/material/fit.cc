@@ -20,6 +20,10 @@ using reflectance::Lobe;
 
 std::string MaterialFitOptions::Validate() const {
   if (models.empty()) return "no model to fit";
+  // The foil centred on the normal is the normal solver's test of a lobe, not a material.
+  for (const Lobe m : models) {
+    if (m == Lobe::kNormalCentred) return "models must be lambert, phong or blinn-phong";
+  }
   if (!(saturation > 0)) return "saturation must be > 0";
   if (!(shadow_threshold > 0 && shadow_threshold < 1)) return "shadow threshold must be in (0, 1)";
   if (folds < 2) return "folds must be at least 2";

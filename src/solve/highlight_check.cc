@@ -52,12 +52,8 @@ PhotometricData Grid(const PhotometricData& sample, int max_side, int* step, Mas
 
 NormalPlan PlanWith(const NormalPlan& plan, const ModelCandidate& m) {
   NormalPlan p = plan;
-  p.options.model = m.lobe;
-  p.options.shininess = m.shininess;
-  p.options.ambient_term = m.ambient_term;
-  p.options.code_offset = m.code_offset;
+  p.Use(m);
   p.options.progress = nullptr;
-  p.model_choice.chosen = m;
   return p;
 }
 
@@ -102,14 +98,7 @@ HighlightCheck CheckHighlight(const PhotometricData& sample, NormalPlan& plan) {
                 check.highlight_kept ? check.foil_deg : check.highlight_deg, check.pixels,
                 check.step);
   choice.note += text;
-  if (check.highlight_kept) {
-    const NormalPlan kept = PlanWith(plan, highlight);
-    plan.options.model = kept.options.model;
-    plan.options.shininess = kept.options.shininess;
-    plan.options.ambient_term = kept.options.ambient_term;
-    plan.options.code_offset = kept.options.code_offset;
-    choice.chosen = highlight;
-  }
+  if (check.highlight_kept) plan.Use(highlight);
   return check;
 }
 

@@ -15,9 +15,9 @@
 namespace iphong::solve {
 
 // The grid's size: at most this many pixels along the longer side of the sample's bounding box
-// (every pixel of a smaller one). Solving two models on 128 × 128 pixels costs a fraction of a
-// whole run, and on a grid four times coarser than DiLiGenT's crops the fields kept the order of
-// their full-resolution ones.
+// (every pixel of a smaller one): two solves of at most 128 × 128 pixels cost a fraction of a
+// whole run, and a bend toward the lights is a pixel-to-pixel disagreement that a coarser grid
+// still sees (docs/accuracy.md has the measurements).
 constexpr int kHighlightCheckSide = 128;
 
 struct HighlightCheck {

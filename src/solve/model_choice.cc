@@ -248,7 +248,31 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
       family.push_back(m);
     }
   }
-  for (const ModelCandidate& m : family) held_out(m);
+  // The foil is scored only once a mirror lobe of the family predicts better than Lambert: it is
+  // there to take what such a lobe might be absorbing, so where none does (a matte object) the
+  // choice costs what it did without it. Asked for alone (`only`), it is scored.
+  const auto is_mirror = [](reflectance::Lobe lobe) {
+    return lobe == reflectance::Lobe::kPhong || lobe == reflectance::Lobe::kBlinnPhong;
+  };
+  const bool family_has_mirror = std::any_of(
+      family.begin(), family.end(), [&](const ModelCandidate& m) { return is_mirror(m.lobe); });
+  const auto mirror_beats_lambert = [&] {
+    double lambert = INFINITY, mirror = INFINITY;
+    for (std::size_t i = 0; i < choice.scored.size(); ++i) {
+      if (!complete[i]) continue;
+      const ModelCandidate& m = choice.scored[i];
+      if (m.lobe == reflectance::Lobe::kLambert) lambert = std::min(lambert, m.heldout_cost);
+      if (is_mirror(m.lobe)) mirror = std::min(mirror, m.heldout_cost);
+    }
+    return mirror < lambert;
+  };
+  for (const ModelCandidate& m : family) {
+    if (m.lobe == reflectance::Lobe::kNormalCentred && family_has_mirror &&
+        !mirror_beats_lambert()) {
+      continue;
+    }
+    held_out(m);
+  }
   // Each lobe's shininess refined from its own best grid point, so that the grid does not decide
   // between two lobes that predict alike (Phong n and Blinn-Phong about 4n): one step of √2
   // each way (not wider than a highlight), then a golden-section search of log n within √2 either

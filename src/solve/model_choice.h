@@ -7,7 +7,8 @@
 // fits its own data better. A specular model is used only where it predicts better than Lambert.
 //
 // Beside the mirror lobes the family holds a foil: a lobe of the same widths centred on the
-// normal, (N·L)^n (reflectance::Lobe::kNormalCentred). What a broad mirror lobe gains over
+// normal, (N·L)^n (reflectance::Lobe::kNormalCentred), scored once a mirror lobe predicts better
+// than Lambert. What a broad mirror lobe gains over
 // Lambert may be no highlight at all: the fall-off of lights nearer than the file says, a
 // diffuse term sharper than the cosine, shadows and interreflections at grazing light. Such a
 // departure follows the normal, and the foil takes it without pulling the normal toward anybody's

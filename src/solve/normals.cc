@@ -167,6 +167,14 @@ bool NeedsPlanSample(const NormalOptions& options) {
   return options.model != reflectance::Lobe::kLambert && !options.material_known;
 }
 
+void NormalPlan::Use(const ModelCandidate& m) {
+  options.model = m.lobe;
+  options.shininess = m.shininess;
+  options.ambient_term = m.ambient_term;
+  options.code_offset = m.code_offset;
+  model_choice.chosen = m;
+}
+
 NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& options,
                        const std::vector<Vec3d>* starts) {
   CheckInputs(sample, options);
@@ -187,10 +195,7 @@ NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& optio
   choice.starts = starts;
   plan.model_choice = ChooseModel(
       sample, ModelFamily(o.choose_model ? std::nullopt : std::optional(o.model)), choice);
-  o.model = plan.model_choice.chosen.lobe;
-  o.shininess = plan.model_choice.chosen.shininess;
-  o.ambient_term = plan.model_choice.chosen.ambient_term;
-  o.code_offset = plan.model_choice.chosen.code_offset;
+  plan.Use(plan.model_choice.chosen);
   CheckHighlight(sample, plan);
   if (o.weigh_by_shading && !plan.model_choice.fold.empty()) {
     const std::vector<std::size_t> pixels = SpreadIndices(sample.pixel_count(), o.model_sample);

@@ -164,6 +164,10 @@ struct NormalPlan {
   reflectance::Lobe requested_model = reflectance::Lobe::kPhong;
   ModelChoice model_choice;  // estimated coefficients: every model's held-out score
   double model_seconds = 0;
+
+  // Makes `m` the plan's model: its lobe, shininess, ambient term and reading of integer codes in
+  // `options`, and `m` itself as the choice's (whose ks prior the fits take).
+  void Use(const ModelCandidate& m);
 };
 
 // The whole-object decisions, from the plan sample's observations. With `starts` (a normal per

@@ -94,6 +94,9 @@ def test_bad_input_is_value_error():
         iphong.fit_material(*args, r["normals"], mask=r["mask"], albedo="texture")
     with pytest.raises(ValueError, match="no pixel|selects no"):
         iphong.fit_material(*args, r["normals"], mask=np.zeros((64, 96), bool))
+    # The normal solver's foil is not a material (the fitter once took it for Phong).
+    with pytest.raises(ValueError, match="lambert, phong or blinn-phong"):
+        iphong.fit_material(*args, r["normals"], mask=r["mask"], models=["normal-centred"])
 
 
 def test_relight_a_fitted_capture_under_one_of_its_lights():

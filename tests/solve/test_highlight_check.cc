@@ -50,6 +50,29 @@ TEST(HighlightCheck, TheFoilIsOfferedInTheOpenChoiceAndWhenAskedFor) {
   EXPECT_EQ(MinimumShininess(foil), MinimumShininess(reflectance::Lobe::kPhong));
 }
 
+// A matte sphere: no mirror lobe predicts better than Lambert, so the foil is not scored at all
+// (the choice costs what it did without it) and Lambert is chosen; on a glossy one a mirror lobe
+// does and the foil's grid is scored; asked for alone, the foil is scored and chosen.
+TEST(HighlightCheck, TheFoilIsScoredWhereAMirrorLobeBeatsLambertOrWhenAskedFor) {
+  const auto scores_foil = [](const ModelChoice& c) {
+    return std::any_of(c.scored.begin(), c.scored.end(), [](const ModelCandidate& m) {
+      return m.lobe == reflectance::Lobe::kNormalCentred;
+    });
+  };
+  reflectance::Material matte;
+  matte.kd = Vec3d(0.6, 0.5, 0.4);
+  const Synthetic m = MakeSphereData(matte, 12, 0.01);
+  const ModelChoice choice = ChooseModel(m.data, ModelFamily(std::nullopt), ModelChoiceSettings{});
+  EXPECT_EQ(choice.chosen.lobe, reflectance::Lobe::kLambert);
+  EXPECT_FALSE(scores_foil(choice));
+  const Synthetic g = MakeSphereData(Plastic(), 12, 0.01);
+  EXPECT_TRUE(scores_foil(ChooseModel(g.data, ModelFamily(std::nullopt), ModelChoiceSettings{})));
+  const ModelChoice alone =
+      ChooseModel(m.data, ModelFamily(reflectance::Lobe::kNormalCentred), ModelChoiceSettings{});
+  EXPECT_EQ(alone.chosen.lobe, reflectance::Lobe::kNormalCentred);
+  EXPECT_FALSE(alone.highlight);
+}
+
 TEST(HighlightCheck, ABrighteningThatFollowsTheNormalGoesToTheFoil) {
   const Synthetic s = FoilSphere();
   const NormalResult r = EstimateNormals(s.data, NormalOptions{});
