@@ -227,8 +227,9 @@ IntensityEstimate EstimateIntensities(const solve::PhotometricData& data,
 
 // Estimated intensities against given ones (a light_intensities.txt): how far apart they are,
 // each scaled to mean 1 per channel (per light and channel, |estimated / given − 1|), and how far
-// apart they put the normals: one plan (`options`' model choice, made under the estimate) fitted
-// under each, the mean angle over the pixels both solve. Neither run can say which set is right;
+// apart they put the normals: a run under each (`options`, its model choice made under that set),
+// the mean angle over the pixels both solve — which bounds how much better or worse either run's
+// mean error can be than the other's. Neither run can say which set is right;
 // the normals' figure is what a user needs to hear when they disagree.
 struct IntensityComparison {
   double median_relative = 0, max_relative = 0;
