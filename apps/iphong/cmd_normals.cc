@@ -576,9 +576,10 @@ void AddNormalsCommand(CLI::App& app) {
   cmd->add_flag("--fast", o->fast,
                 "Fit normals to the luminance instead of all three channels (about 2x faster)");
   cmd->add_flag("--estimate-intensities", o->estimate_intensities,
-                "Estimate each light's RGB intensity with the normals (semi-calibrated; the "
-                "intensity file is not used; written as light_intensities.txt, each channel's "
-                "mean 1)");
+                "Estimate each light's RGB intensity with the normals (semi-calibrated; an "
+                "intensity file is not used for the normals, only compared with: how far apart "
+                "the two runs' normals are is said, and without one a warning says the estimate "
+                "is unchecked; written as light_intensities.txt, each channel's mean 1)");
   cmd->add_option("--error-range", o->error_range,
                   "With ground truth: degrees at the top of error.png's colour scale, so maps of "
                   "several runs compare (default: from the data, the 95th percentile rounded up)")
