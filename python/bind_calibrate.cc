@@ -251,7 +251,10 @@ light_intensities (K, 3), each channel's mean 1, eigen_gap (how well determined:
 smallest eigenvalue over the smallest), lambert_residual and code_offset (half a code step when
 integer-coded images were better explained as truncated, the estimate made on each code's middle;
 else 0); raises ValueError when the images are too far from Lambertian for the estimate (a median
-relative residual over 0.05).)doc");
+relative residual over 0.05) or cannot pin it (an eigenvalue gap under 8). Accepted is not exact:
+wherever published intensities existed, the normals under the estimate were 1.0-3.2 deg from
+theirs, since a fall-off or reflectance that varies with the light's direction reads as
+intensity; compare with measured intensities where a degree matters.)doc");
 }
 
 }  // namespace iphong::python
