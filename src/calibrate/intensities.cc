@@ -261,16 +261,10 @@ IntensityComparison CompareIntensities(const solve::PhotometricData& data,
   // Each set's own run, model choice included: the intensities move the choice too (the rendered
   // bunny: under the estimate Lambert, under its file the foil; one plan for both put the normals
   // 0.96° apart where the two runs are 3.2° apart).
-  const std::vector<std::size_t> sample =
-      solve::PlanSampleIndices(data.pixel_count(), options.plan_sample);
   const auto run = [&](const std::vector<Rgb>& intensities) {
     solve::PhotometricData under = data;
     under.light_intensities = intensities;
-    const solve::NormalPlan plan =
-        sample.size() == under.pixel_count()
-            ? solve::PlanNormals(under, options)
-            : solve::PlanNormals(solve::SubsetObservations(under, sample), options);
-    return solve::SolveNormalsWithPlan(under, plan);
+    return solve::EstimateNormals(under, options);
   };
   const solve::NormalResult b = run(estimated);
   const solve::NormalResult a = run(scaled);

@@ -113,10 +113,8 @@ TEST(HighlightCheck, KeepsTheModelWhoseNormalsMakeASurface) {
     o.choose_model = false;
     o.weigh_by_shading = false;
     NormalPlan plan = PlanNormals(c.s.data, o);
-    plan.model_choice.chosen = foil;
+    plan.Use(foil);
     plan.model_choice.highlight = phong;
-    plan.options.model = foil.lobe;
-    plan.options.shininess = foil.shininess;
     const HighlightCheck check = CheckHighlight(c.s.data, plan);
     std::printf("%s render: foil %.3f deg, highlight %.3f deg from their surfaces, %zu pixels\n",
                 c.highlight_true ? "Phong" : "foil", check.foil_deg, check.highlight_deg,
