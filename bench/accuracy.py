@@ -47,6 +47,7 @@ def light_subset(folder, k, into):
     pick = [int(np.argmax(directions[:, 2]))]
     while len(pick) < k:
         apart = np.arccos(np.clip(directions @ directions[pick].T, -1, 1)).min(axis=1)
+        apart[pick] = -1  # a light listed twice is not taken twice
         pick.append(int(np.argmax(apart)))
     pick.sort()
     out = into / f"{folder.parent.name}-{folder.name}"

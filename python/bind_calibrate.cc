@@ -2,6 +2,7 @@
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
+#include <string>
 
 #include "arrays.h"
 #include "bindings.h"
@@ -78,6 +79,21 @@ py::list FromNormals(const std::vector<const ImageF*>& images, const ImageF& nor
   out["converged"] = c.converged;
   out["seconds"] = c.seconds;
   return Notes(c.warnings);
+}
+
+// estimate_intensities' docstring, with the library's account of what an estimate is worth.
+const std::string& EstimateIntensitiesDoc() {
+  static const std::string doc =
+      std::string(R"doc(Each light's relative RGB intensity from images under known directions
+(semi-calibrated photometric stereo; `iphong normals --estimate-intensities`). Returns
+light_intensities (K, 3), each channel's mean 1, eigen_gap (how well determined: the second
+smallest eigenvalue over the smallest), lambert_residual and code_offset (half a code step when
+integer-coded images were better explained as truncated, the estimate made on each code's middle;
+else 0); raises ValueError when the images are too far from Lambertian for the estimate (a median
+relative residual over 0.05) or cannot pin it (an eigenvalue gap under 8). Accepted is not exact: )doc") +
+      calibrate::kUncheckedEstimateNote +
+      "; compare with measured intensities where a degree matters.";
+  return doc;
 }
 
 }  // namespace
@@ -245,16 +261,7 @@ None; residual and pixels_used per light. Raises ValueError when an image has no
       },
       py::arg("images"), py::arg("light_directions"), py::arg("mask") = py::none(),
       py::arg("discard_dark") = 0.3, py::arg("discard_bright") = 0.1, py::arg("threads") = 0,
-      R"doc(Each light's relative RGB intensity from images under known directions
-(semi-calibrated photometric stereo; `iphong normals --estimate-intensities`). Returns
-light_intensities (K, 3), each channel's mean 1, eigen_gap (how well determined: the second
-smallest eigenvalue over the smallest), lambert_residual and code_offset (half a code step when
-integer-coded images were better explained as truncated, the estimate made on each code's middle;
-else 0); raises ValueError when the images are too far from Lambertian for the estimate (a median
-relative residual over 0.05) or cannot pin it (an eigenvalue gap under 8). Accepted is not exact:
-wherever published intensities existed, the normals under the estimate were 1.0-3.2 deg from
-theirs, since a fall-off or reflectance that varies with the light's direction reads as
-intensity; compare with measured intensities where a degree matters.)doc");
+      EstimateIntensitiesDoc().c_str());
 }
 
 }  // namespace iphong::python

@@ -29,15 +29,6 @@ namespace iphong::cli {
 
 namespace {
 
-// What an estimate with nothing to compare against is worth (docs/guides/calibrating-lights.md).
-constexpr const char* kUncheckedEstimate =
-    "--estimate-intensities with no intensity file to check the estimate against: where "
-    "calibrated intensities were known, the estimate's normals were 1.0-3.2 deg from theirs "
-    "(DiLiGenT ball and cat, their crops, a rendered bunny), because a fall-off or reflectance "
-    "that varies with the light's direction reads as intensity and the photos cannot tell the "
-    "two apart; calibrate the lights (iphong calibrate-lights on a matte sphere) where a degree "
-    "matters";
-
 nlohmann::json MetricsJson(const solve::AngularErrorMetrics& m) {
   return {{"evaluated_pixels", m.pixels},
           {"mean_angular_error_deg", m.mean_deg},
@@ -237,7 +228,11 @@ void RunNormals(const NormalsCommandOptions& o) {
       // Nothing to check the estimate against, and no figure of the photos bounds its error: a
       // factor that varies smoothly with the light's direction (a fall-off or reflectance Lambert
       // does not model) is explained as well by intensities as by normals, so the user hears it.
-      Warn(o.dataset + ": " + kUncheckedEstimate);
+      Warn(o.dataset +
+           ": --estimate-intensities with no intensity file to check the estimate against: " +
+           calibrate::kUncheckedEstimateNote +
+           "; calibrate the lights (iphong calibrate-lights on a matte sphere) where a degree "
+           "matters");
     }
     loaded.observations.light_intensities = estimated->light_intensities;
   }

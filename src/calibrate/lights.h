@@ -225,6 +225,15 @@ struct IntensityEstimate {
 IntensityEstimate EstimateIntensities(const solve::PhotometricData& data,
                                       const IntensityOptions& options);
 
+// What an accepted estimate is worth, measured where calibrated intensities were known
+// (docs/guides/calibrating-lights.md): said wherever an estimate is made with none to compare
+// against (the command line's warning, the Python docstring).
+inline constexpr const char* kUncheckedEstimateNote =
+    "where calibrated intensities were known, the estimate's normals were 1.0-3.2 deg from "
+    "theirs (DiLiGenT ball and cat, their crops, a rendered bunny), because a fall-off or "
+    "reflectance that varies with the light's direction reads as intensity and the photos cannot "
+    "tell the two apart";
+
 // Estimated intensities against given ones (a light_intensities.txt): how far apart they are,
 // each scaled to mean 1 per channel (per light and channel, |estimated / given − 1|), and how far
 // apart they put the normals: a run under each (`options`, its model choice made under that set),
