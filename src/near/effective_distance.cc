@@ -411,11 +411,13 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
       return !refused;
     };
     // The proposals with the centre chosen are judged first. Where every one is refused, those
-    // round the surface's mean point are judged as before the centre was chosen: the position
-    // check's verdict on a sphere-like object, whose points placed by their normals are the
-    // surface itself, is left to which of two surfaces integrated from the distant normals is
-    // less wrong (iphong's dome of 24 lights: the centre chosen 5 px behind, refused at 2.2
-    // standard errors, where the mean point's D was kept by 15 and gave 1.78°).
+    // round the surface's mean point are judged as before the centre was chosen. That is a
+    // guard, not a reason: on a sphere-like object, whose points placed by their normals are the
+    // surface itself, the position check only says which of two surfaces made from the distant
+    // normals is less wrong, and it refuses right proposals as readily as wrong ones (iphong's
+    // dome of 24 lights: the centre chosen 5 px behind refused at 2.2 standard errors, the mean
+    // point's D kept by 15, 1.78°; the guard's cost, a matte sphere at 1.4 object sizes keeping
+    // the mean point's D and 8.06°, docs/guides/near-lights.md).
     const auto decide = [&](int k) {
       Test& model_test = tests[0];
       Test& diffuse_test = tests[1];
