@@ -505,8 +505,7 @@ light_axes (K, 3) and light_anisotropy (K) for LEDs, distance (mm) a first guess
 distance; light_intensities are then each light's intensity (irradiance x mm^2). The result adds
 depth (H, W) mm along the axis, points (H, W, 3) and near (passes, distance). With directions only,
 light_distance: "auto" (chosen by held-out prediction, distant lights among the candidates),
-"inf" or a distance in pixels; the result adds effective_distance (D, the depth of the lights'
-centre, the candidates' scores).)doc");
+"inf" or a distance in pixels; the result adds effective_distance (the candidates' scores).)doc");
 
   m.def(
       "angular_error",

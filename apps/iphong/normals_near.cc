@@ -167,8 +167,7 @@ nlohmann::json EffectiveDistanceJson(const near::EffectiveDistanceResult& r) {
           std::isinf(c.distance_px) ? nlohmann::json("inf") : nlohmann::json(c.distance_px)},
          {"test", c.criterion},
          {"heldout_cost", c.heldout_cost},
-         {"heldout_error", c.heldout_error},
-         {"centre_offset_px", c.centre_offset_px}});
+         {"heldout_error", c.heldout_error}});
   }
   // Each proposed D checked against points placed by their normals (near::PositionCheck).
   nlohmann::json position_checks = nlohmann::json::array();
@@ -187,7 +186,6 @@ nlohmann::json EffectiveDistanceJson(const near::EffectiveDistanceResult& r) {
            std::isinf(r.distance_px) ? nlohmann::json("inf") : nlohmann::json(r.distance_px)},
           {"chosen", r.chosen},
           {"object_size_px", r.object_size_px},
-          {"centre_offset_px", r.centre_offset_px},
           {"test", r.criterion},
           {"heldout_gain", r.gain},
           {"heldout_gain_error", r.gain_error},

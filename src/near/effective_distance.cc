@@ -176,7 +176,6 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
   centre /= static_cast<double>(pixels);
 
   double distance = o.distance_px;
-  Vec3d light_centre = centre;  // where the lights' directions meet: chosen with D (below)
   if (!(distance > 0)) {
     // Held-out costs on the model choice's pixels and folds, each fold's normal refined from the
     // distant one (warm), for D = ∞ and each candidate, by two tests of nearness:
@@ -223,30 +222,21 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
         normal_points[i] = x_mean + scale * (starts[i] - n_mean);
       }
     }
-    // A test's proposal: its best D and the lights' centre's depth with it, its costs there,
-    // and its gain over D = ∞.
-    struct Proposal {
-      std::vector<double> best_costs;
-      bool passes = false;
-      double distance = 0, centre_z = 0, gain = 0, gain_error = 0;
-    };
-    // Each test: its model and settings, its costs at D = ∞, and two proposals: [0] with the
-    // centre's depth chosen, [1] round the surface's mean point.
+    // Each test: its model and settings, its costs at D = ∞, and the D it proposes.
     struct Test {
       solve::ModelCandidate model;
       solve::ModelChoiceSettings settings;
-      std::vector<double> distant_costs;
-      bool run = false;
-      Proposal proposal[2];
+      std::vector<double> distant_costs, best_costs;  // at D = ∞ and at `distance`
+      bool run = false, passes = false;
+      double distance = 0, gain = 0, gain_error = 0;
     };
     Test tests[2];
-    const auto centre_at = [&](double z) { return Vec3d(centre.x(), centre.y(), z); };
-    const auto test_costs = [&](Test& test, double d, double z) {
+    const auto test_costs = [&](Test& test, double d) {
       solve::ModelCandidate m = test.model;
       std::vector<double> c =
           std::isinf(d) ? solve::PixelHeldOutCosts(sub, m, sample, fold, test.settings)
-                        : solve::PixelHeldOutCosts(NearData(sub, frame, sub_depth, centre_at(z), d),
-                                                   m, sample, fold, test.settings);
+                        : solve::PixelHeldOutCosts(NearData(sub, frame, sub_depth, centre, d), m,
+                                                   sample, fold, test.settings);
       return std::pair(std::move(c), m);
     };
     for (const bool diffuse : {false, true}) {
@@ -276,24 +266,19 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
       const std::string criterion = diffuse ? "diffuse" : "model";
       std::vector<std::vector<double>> costs;
       const std::size_t first = result.scored.size();
-      const auto score = [&](double d, double z) {
-        auto [c, m] = test_costs(test, d, z);
+      const auto score = [&](double d) {
+        auto [c, m] = test_costs(test, d);
         costs.push_back(std::move(c));
-        result.scored.push_back(
-            {d, m.heldout_cost, m.heldout_error, criterion, std::isinf(d) ? 0 : z - centre.z()});
+        result.scored.push_back({d, m.heldout_cost, m.heldout_error, criterion});
         return m.heldout_cost;
       };
       const auto cost_of = [&](std::size_t i) { return result.scored[first + i].heldout_cost; };
-      const auto best_scored = [&] {
-        std::size_t b = 0;
-        for (std::size_t i = 1; i < costs.size(); ++i) {
-          if (cost_of(i) < cost_of(b)) b = i;
-        }
-        return b;
-      };
-      score(std::numeric_limits<double>::infinity(), centre.z());
-      for (double f : kDistanceGrid) score(f * result.object_size_px, centre.z());
-      std::size_t best = best_scored();
+      score(std::numeric_limits<double>::infinity());
+      std::size_t best = 0;
+      for (double f : kDistanceGrid) {
+        score(f * result.object_size_px);
+        if (cost_of(costs.size() - 1) < cost_of(best)) best = costs.size() - 1;
+      }
       if (best > 0) {
         // Golden section in log D between the best grid point's neighbours.
         const std::size_t g = best - 1;  // its place in the grid
@@ -301,51 +286,27 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
         const double step_hi =
             g + 1 < std::size(kDistanceGrid) ? kDistanceGrid[g + 1] : kDistanceGrid[g];
         GoldenSectionLog(step_lo * result.object_size_px, step_hi * result.object_size_px, 4,
-                         [&](double d) { return score(d, centre.z()); });
-        best = best_scored();
+                         score);
+        for (std::size_t i = 1; i < costs.size(); ++i) {
+          if (cost_of(i) < cost_of(best)) best = i;
+        }
       }
       test.distant_costs = costs[0];
-      const auto propose = [&](Proposal& p, std::size_t b, const char* round) {
-        p.best_costs = costs[b];
-        std::tie(p.gain, p.gain_error) =
-            solve::PairedDifference(costs[0].data(), costs[b].data(), costs[0].size());
-        p.distance = result.scored[first + b].distance_px;
-        p.centre_z = centre.z() + result.scored[first + b].centre_offset_px;
-        p.passes = b > 0 && p.gain > p.gain_error;  // a gain must exceed one standard error
-        char line[260];
-        std::snprintf(line, sizeof line,
-                      "effective distance by the %s, %s: best %.4g px (%.3g object sizes), "
-                      "held-out gain %.4g +- %.2g over distant lights",
-                      diffuse ? "diffuse term" : "object's model", round, p.distance,
-                      p.distance / result.object_size_px, p.gain, p.gain_error);
-        say(line);
-      };
-      propose(test.proposal[1], best, "round the surface's mean point");
-      if (best > 0) {
-        // The lights' centre: "directions from the object's centre" name a point inside the
-        // object, behind the surface the camera sees (a sphere's centre lies 2/3 of its radius
-        // behind its visible surface's mean), by a depth no silhouette gives. Where the lights
-        // are near that depth turns every light's direction across the object as much as D
-        // does, and a D fitted round the wrong centre bends the normals (a matte sphere under a
-        // dome at 1.3 object sizes: 9.6° with the surface's mean as the centre), so it is chosen
-        // with D: golden section from a size behind that mean to a quarter in front, then D
-        // again round the best.
-        const double d0 = result.scored[first + best].distance_px;
-        GoldenSection(centre.z() - 0.75 * result.object_size_px,
-                      centre.z() + 0.25 * result.object_size_px, 7,
-                      [&](double z) { return score(d0, z); });
-        best = best_scored();
-        const double d1 = result.scored[first + best].distance_px;
-        const double z1 = centre.z() + result.scored[first + best].centre_offset_px;
-        GoldenSectionLog(d1 / 1.5, d1 * 1.5, 4, [&](double d) { return score(d, z1); });
-        best = best_scored();
-        char round[80];
-        std::snprintf(round, sizeof round, "its centre %.3g px behind the surface's mean point",
-                      -result.scored[first + best].centre_offset_px);
-        propose(test.proposal[0], best, round);
-      } else {
-        test.proposal[0] = test.proposal[1];
-      }
+      test.best_costs = costs[best];
+      const auto [mean, error] =
+          solve::PairedDifference(costs[0].data(), costs[best].data(), costs[0].size());
+      const double d = result.scored[first + best].distance_px;
+      char line[240];
+      std::snprintf(line, sizeof line,
+                    "effective distance by the %s: best %.4g px (%.3g object sizes), held-out "
+                    "gain %.4g +- %.2g over distant lights",
+                    diffuse ? "diffuse term" : "object's model", d, d / result.object_size_px, mean,
+                    error);
+      say(line);
+      test.distance = d;
+      test.gain = mean;
+      test.gain_error = error;
+      test.passes = best > 0 && mean > error;  // a gain must exceed one standard error
     }
     // The diffuse test stands in for the object's model where a broad lobe imitates the fall-off;
     // where the object's own model predicts worse at its D beyond one standard error, its gain is
@@ -363,21 +324,20 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
     // 2.2–16 standard errors. A matte sphere under point lights at 1.5 object sizes: the diffuse
     // fit prefers the surface's by 20, its distant-chosen lobe the normals' by 1.9. On DiLiGenT
     // the more significant fit prefers the surface's points at every D proposed (1.4–5.0).
-    const auto positions_explain = [&](double d, double z, std::vector<double> surface_costs[2]) {
+    const auto positions_explain = [&](double d, std::vector<double> surface_costs[2]) {
       const std::size_t first_check = result.position_checks.size();
       double decisive = 0;  // the more significant check's gain in standard errors
       for (int t = 0; t < 2; ++t) {
         Test& test = tests[t];
         if (!test.run) continue;
-        if (surface_costs[t].empty()) surface_costs[t] = test_costs(test, d, z).first;
+        if (surface_costs[t].empty()) surface_costs[t] = test_costs(test, d).first;
         const char* criterion = t ? "diffuse" : "model";
-        const PhotometricData placed =
-            NearData(sub, frame, sub_depth, centre_at(z), d, &normal_points);
+        const PhotometricData placed = NearData(sub, frame, sub_depth, centre, d, &normal_points);
         solve::ModelCandidate m = test.model;
         const std::vector<double> c =
             solve::PixelHeldOutCosts(placed, m, sample, fold, test.settings);
-        result.scored.push_back({d, m.heldout_cost, m.heldout_error,
-                                 std::string(criterion) + ", placed by normals", z - centre.z()});
+        result.scored.push_back(
+            {d, m.heldout_cost, m.heldout_error, std::string(criterion) + ", placed by normals"});
         PositionCheck check;
         check.distance_px = d;
         check.criterion = criterion;
@@ -410,70 +370,46 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
       }
       return !refused;
     };
-    // The proposals with the centre chosen are judged first. Where every one is refused, those
-    // round the surface's mean point are judged as before the centre was chosen. That is a
-    // guard, not a reason: on a sphere-like object, whose points placed by their normals are the
-    // surface itself, the position check only says which of two surfaces made from the distant
-    // normals is less wrong, and it refuses right proposals as readily as wrong ones (iphong's
-    // dome of 24 lights: the centre chosen 5 px behind refused at 2.2 standard errors, the mean
-    // point's D kept by 15, 1.78°; the guard's cost, a matte sphere at 1.4 object sizes keeping
-    // the mean point's D and 8.06°, docs/guides/near-lights.md).
-    const auto decide = [&](int k) {
-      Test& model_test = tests[0];
-      Test& diffuse_test = tests[1];
-      Proposal& model = model_test.proposal[k];
-      Proposal& diffuse = diffuse_test.proposal[k];
-      if (model_test.run && model.passes) {
-        std::vector<double> surface[2] = {model.best_costs, {}};
-        model.passes = positions_explain(model.distance, model.centre_z, surface);
+    Test& model_test = tests[0];
+    Test& diffuse_test = tests[1];
+    if (model_test.run && model_test.passes) {
+      std::vector<double> surface[2] = {model_test.best_costs, {}};
+      model_test.passes = positions_explain(model_test.distance, surface);
+    }
+    if (diffuse_test.passes) {
+      std::vector<double> surface[2] = {{}, diffuse_test.best_costs};
+      if (model_test.run) {
+        surface[0] = test_costs(model_test, diffuse_test.distance).first;
+        const auto [loss, error] = solve::PairedDifference(
+            surface[0].data(), model_test.distant_costs.data(), surface[0].size());
+        result.model_loss = loss;
+        result.model_loss_error = error;
+        char line[200];
+        std::snprintf(line, sizeof line,
+                      "the object's model at %.4g px: held-out loss %.4g +- %.2g over distant "
+                      "lights",
+                      diffuse_test.distance, loss, error);
+        say(line);
+        if (loss > error) diffuse_test.passes = false;
       }
-      if (diffuse_test.run && diffuse.passes) {
-        std::vector<double> surface[2] = {{}, diffuse.best_costs};
-        if (model_test.run) {
-          surface[0] = test_costs(model_test, diffuse.distance, diffuse.centre_z).first;
-          const auto [loss, error] = solve::PairedDifference(
-              surface[0].data(), model_test.distant_costs.data(), surface[0].size());
-          result.model_loss = loss;
-          result.model_loss_error = error;
-          char line[200];
-          std::snprintf(line, sizeof line,
-                        "the object's model at %.4g px: held-out loss %.4g +- %.2g over distant "
-                        "lights",
-                        diffuse.distance, loss, error);
-          say(line);
-          if (loss > error) diffuse.passes = false;
-        }
-        if (diffuse.passes) {
-          diffuse.passes = positions_explain(diffuse.distance, diffuse.centre_z, surface);
-        }
-      }
-      double best_t = 0;
-      for (int t = 0; t < 2; ++t) {
-        const Proposal& p = tests[t].proposal[k];
-        if (!tests[t].run || !p.passes) continue;
-        const double z = p.gain_error > 0 ? p.gain / p.gain_error : INFINITY;
-        if (z <= best_t) continue;
-        best_t = z;
-        distance = p.distance;
-        light_centre.z() = p.centre_z;
-        result.gain = p.gain;
-        result.gain_error = p.gain_error;
-        result.criterion = t ? "diffuse" : "model";
-      }
-    };
-    decide(0);
-    const auto same = [](const Proposal& a, const Proposal& b) {
-      return a.distance == b.distance && a.centre_z == b.centre_z;
-    };
-    if (std::isinf(distance) && !(same(tests[0].proposal[0], tests[0].proposal[1]) &&
-                                  same(tests[1].proposal[0], tests[1].proposal[1]))) {
-      decide(1);
+      if (diffuse_test.passes)
+        diffuse_test.passes = positions_explain(diffuse_test.distance, surface);
+    }
+    double best_t = 0;
+    for (int t = 0; t < 2; ++t) {
+      const Test& test = tests[t];
+      if (!test.run || !test.passes) continue;
+      const double z = test.gain_error > 0 ? test.gain / test.gain_error : INFINITY;
+      if (z <= best_t) continue;
+      best_t = z;
+      distance = test.distance;
+      result.gain = test.gain;
+      result.gain_error = test.gain_error;
+      result.criterion = t ? "diffuse" : "model";
     }
   }
   result.choice_seconds = SecondsSince(choice_start);
   result.distance_px = distance;
-  if (std::isinf(distance)) light_centre = centre;
-  result.centre_offset_px = light_centre.z() - centre.z();
   if (std::isinf(distance)) {
     result.seconds = SecondsSince(start);
     return result;
@@ -482,7 +418,7 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
   // The near passes: the model chosen again with these lights (warm), then every pixel refined
   // from its last normal, the surface integrated, until the normals settle. `near` holds the
   // lights and points; the observations stay with the capture.
-  PhotometricData near = NearData(LayoutOf(data), frame, depth, light_centre, distance);
+  PhotometricData near = NearData(LayoutOf(data), frame, depth, centre, distance);
   std::vector<Vec3d> starts;
   {
     const std::vector<Vec3d> all = NormalsPerPixel(result.distant, data);

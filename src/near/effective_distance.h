@@ -1,10 +1,8 @@
 // Captures that give light directions only (DiLiGenT, UW, an RTI .lp) may still be near:
 // DiLiGenT's LEDs sit about a metre from 11 cm objects. One effective distance D puts every light
-// at S_j = c + D·L_j round the object's centre c (orthographic view, heights in pixels: D in
-// pixels), with the intensity it has at c (Φ_j = E_j·D², isotropic), and the near-light loop
-// (near.h) runs with those lights. c is the surface's mean point moved along the view by a depth
-// chosen with D (a D given keeps the mean point): the directions name a point inside the object,
-// behind the surface seen.
+// at S_j = c + D·L_j round the centre c of the object's surface (orthographic view, heights in
+// pixels: D in pixels), with the intensity it has at c (Φ_j = E_j·D², isotropic), and the
+// near-light loop (near.h) runs with those lights.
 //
 // D is chosen by what predicts held-out lights best: the distant solve first (the plan, the
 // search, every pixel's fit), its normals integrated into a surface, then each candidate D — the
@@ -13,8 +11,7 @@
 // the distant one with that D's lights (warm: no search), by two tests: the plan's model (a sharp
 // lobe places highlights by each pixel's light directions) and a Lambertian fit with highlights
 // censored (the diffuse fall-off, which a broad lobe can imitate). In each the lowest wins,
-// refined by golden section between its neighbours, then the centre's depth and D again round
-// the best (golden sections); D = ∞ is kept unless one of them predicts
+// refined by golden section between its neighbours; D = ∞ is kept unless one of them predicts
 // better by more than one paired standard error (the more significant one then decides): a
 // truly distant capture is left as it is. A proposed D stands only where the surface's points
 // predict better than points placed by their normals (PositionCheck): near lights act by where
@@ -38,8 +35,6 @@ struct DistanceCandidate {
   double heldout_cost = 0;   // mean per pixel, in units of each pixel's t²
   double heldout_error = 0;  // its standard error
   std::string criterion;     // "model" (the plan's) or "diffuse" (Lambert, highlights censored)
-  // The lights' centre's height less the surface's mean height (pixels; negative: behind it).
-  double centre_offset_px = 0;
 };
 
 // Nearness is a property of where the surface's points are. At the distance a test proposes,
@@ -79,10 +74,7 @@ struct EffectiveDistanceResult {
   solve::NormalResult normals;  // the chosen D's (the distant solve's for D = ∞)
   solve::NormalResult distant;  // the distant solve's
   double distance_px = std::numeric_limits<double>::infinity();
-  double object_size_px = 0;  // the larger side of the mask's bounding box
-  // The lights' centre c (S_j = c + D·L_j): the surface's mean point moved along the view by
-  // this many pixels (negative: behind the surface), chosen with D; 0 for D = ∞ or a D given.
-  double centre_offset_px = 0;
+  double object_size_px = 0;              // the larger side of the mask's bounding box
   std::vector<DistanceCandidate> scored;  // D = ∞ first, then the grid, then the refinement
   // Held-out cost at D = ∞ less at the chosen D (t² per pixel) and its paired standard error,
   // by the test that chose it ("model" or "diffuse"; "" for D = ∞).

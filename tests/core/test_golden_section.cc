@@ -1,6 +1,5 @@
-// The golden-section search (linear, and in log x) shared by the model choice (shininess) and the
-// effective light distance: call count, distinct points, and convergence on a closed-form unimodal
-// function.
+// The golden-section search in log x shared by the model choice (shininess) and the effective
+// light distance: call count, distinct points, and convergence on a closed-form unimodal function.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -32,26 +31,6 @@ TEST(GoldenSection, FindsTheMinimumOfALogQuadraticWithinTheBracketsWidth) {
     }
     const double width = std::log(10.0) * std::pow((std::sqrt(5.0) - 1) / 2, iterations + 1);
     EXPECT_LT(std::abs(std::log(best / 3)), width) << iterations << " iterations";
-  }
-}
-
-// The linear search (a light centre's depth): f(x) = |x + 0.3|, a minimum with a kink, on
-// [−0.75, 0.25]; the bracket after n narrowings is 0.618^(n+1) wide.
-TEST(GoldenSection, FindsAKinkedMinimumOnALinearScale) {
-  for (int iterations : {0, 5, 7}) {
-    std::vector<double> xs;
-    GoldenSection(-0.75, 0.25, iterations, [&](double x) {
-      xs.push_back(x);
-      return std::abs(x + 0.3);
-    });
-    ASSERT_EQ(xs.size(), static_cast<std::size_t>(2 + iterations));
-    double best = xs[0];
-    for (double x : xs) {
-      EXPECT_GT(x, -0.75);
-      EXPECT_LT(x, 0.25);
-      if (std::abs(x + 0.3) < std::abs(best + 0.3)) best = x;
-    }
-    EXPECT_LT(std::abs(best + 0.3), std::pow((std::sqrt(5.0) - 1) / 2, iterations + 1));
   }
 }
 
