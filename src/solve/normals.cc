@@ -22,7 +22,7 @@ namespace iphong::solve {
 namespace internal {
 
 WoodhamSettings WoodhamOf(const NormalOptions& o) {
-  return {o.discard_dark, o.discard_bright, o.ambient_term};
+  return {o.discard_dark, o.discard_bright, o.saturation, o.ambient_term};
 }
 
 PixelFitSettings FitSettingsOf(const NormalOptions& o) {

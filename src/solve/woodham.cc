@@ -26,8 +26,13 @@ PixelSolution Woodham(const PhotometricData& data, std::size_t p, const WoodhamS
   const int k = data.images;
   const float* obs = data.pixel(p);
   lights.At(p);
+  const double saturation = PixelSaturation(obs, 3 * std::size_t(k), o.saturation);
+  auto clipped = [&](int j) {
+    return std::max({obs[3 * j], obs[3 * j + 1], obs[3 * j + 2]}) >= saturation;
+  };
   order.clear();
   double brightest = 0;
+  int clipped_count = 0;
   for (int j = 0; j < k; ++j) {
     // A near light that sends the point nothing is left out (it sorts first, among the dark).
     if (!lights.lit(j)) continue;
@@ -36,6 +41,13 @@ PixelSolution Woodham(const PhotometricData& data, std::size_t p, const WoodhamS
         internal::Luminance((rgb - o.ambient_term).cwiseQuotient(lights.irradiance(j)));
     order.emplace_back(g, j);
     brightest = std::max(brightest, g);
+    clipped_count += clipped(j);
+  }
+  const int seen = static_cast<int>(order.size());  // every lit observation, clipped or not
+  if (clipped_count > 0 && seen - clipped_count >= 3) {
+    order.erase(std::remove_if(order.begin(), order.end(),
+                               [&](const std::pair<double, int>& e) { return clipped(e.second); }),
+                order.end());
   }
   const int lit = static_cast<int>(order.size());
   PixelSolution s;
@@ -43,8 +55,11 @@ PixelSolution Woodham(const PhotometricData& data, std::size_t p, const WoodhamS
     s.status = PixelStatus::kDark;
     return s;
   }
-  int first = static_cast<int>(std::floor(o.discard_dark * lit));
-  int last = lit - static_cast<int>(std::floor(o.discard_bright * lit));
+  // The fractions are of every lit observation, so a pixel's shadows are dropped as they would be
+  // unclipped; the clipped ones, the brightest in truth, count toward the bright fraction.
+  int first = static_cast<int>(std::floor(o.discard_dark * seen));
+  int last =
+      lit - std::max(0, static_cast<int>(std::floor(o.discard_bright * seen)) - (seen - lit));
   if (last - first < 3) {
     first = 0;
     last = lit;

@@ -2,6 +2,10 @@
 // other estimate must beat: per pixel, the least-squares b = kd·N of y_j = L_j·b over the
 // luminance of y_j = (I_j − Ia⊙ka)/E_j, after dropping the darkest `discard_dark` and brightest
 // `discard_bright` fractions of the pixel's observations (shadows, highlights). Camera frame.
+// Clipped observations (a channel at or above the pixel's PixelSaturation level) say only "at
+// least this bright" and are left out before the ranking, as in every other fit; a pixel with
+// fewer than three unclipped observations is solved on all of them (nothing else would give it a
+// normal).
 #pragma once
 
 #include <Eigen/Core>
@@ -16,6 +20,7 @@ namespace iphong::solve {
 struct WoodhamSettings {
   double discard_dark = 0.3;
   double discard_bright = 0.1;
+  double saturation = 0.995;           // NormalOptions::saturation (PixelSaturation)
   Vec3d ambient_term = Vec3d::Zero();  // Ia ⊙ ka, subtracted from every image
 };
 

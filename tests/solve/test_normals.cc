@@ -254,6 +254,41 @@ TEST(Normals, ClippedAtOneLeftOutButFloatValuesAboveOneAreData) {
   EXPECT_NEAR(at_ten, at_unit, 0.02);
 }
 
+// Woodham too leaves clipped observations out before it ranks them, its fractions taken of every
+// lit observation: a matte sphere exposed so brightly that a fifth of its observations clip at 1
+// comes within a degree of the same sphere unclipped (its brightest lights are lost), where
+// ranking the clipped values among the rest (more of them than the brightest tenth it drops)
+// tilts each pixel away from its brightest lights, and taking the fractions of the unclipped
+// ones alone keeps more of a pixel's shadows (6.1 deg).
+TEST(Normals, WoodhamLeavesClippedObservationsOut) {
+  reflectance::Material matte;
+  matte.kd = Vec3d(0.6, 0.5, 0.4);
+  matte.ks = Vec3d::Zero();
+  const Synthetic s = MakeSphereData(matte, 24, 0.0, Vec3d::Zero(), 64);
+  PhotometricData clipped = s.data;
+  std::size_t at_one = 0, values = 0;
+  for (float& v : clipped.values) {
+    v = std::min(3.0f * v, 1.0f);
+    at_one += v >= 1.0f;
+    values += v > 0;
+  }
+  EXPECT_GT(at_one, values / 5);
+  NormalOptions lambert;
+  lambert.model = reflectance::Lobe::kLambert;
+  auto error = [&](const PhotometricData& d, const NormalOptions& o) {
+    return CompareNormals(EstimateNormals(d, o).normals, s.out.normal_cam, s.out.mask).mean_deg;
+  };
+  const double exact = error(s.data, lambert), left_out = error(clipped, lambert);
+  NormalOptions taken = lambert;
+  taken.saturation = 1e30;  // the clipped values taken as measured
+  const double ranked = error(clipped, taken);
+  RecordProperty("unclipped_deg", std::to_string(exact));
+  RecordProperty("clipped_left_out_deg", std::to_string(left_out));
+  RecordProperty("clipped_ranked_deg", std::to_string(ranked));
+  EXPECT_LT(left_out, exact + 1.0);
+  EXPECT_GT(ranked, left_out + 3.0);
+}
+
 TEST(Normals, BadInputGivesOneLineMessages) {
   const auto m = Plastic();
   Synthetic s = MakeSphereData(m, 4, 0.0, Vec3d::Zero(), 24);

@@ -45,11 +45,19 @@ class RealData : public ::testing::TestWithParam<Object> {
 TEST_P(RealData, WoodhamReproducesThePublishedBaselineAndPhongBeatsIt) {
   NormalOptions woodham;
   woodham.model = reflectance::Lobe::kLambert;
-  woodham.discard_dark = woodham.discard_bright = 0;  // the published baseline uses every image
+  woodham.discard_dark = woodham.discard_bright = 0;  // the published baseline uses every image,
+  woodham.saturation = 1e30;                          // its clipped values taken as measured
   const AngularErrorMetrics w = Run(woodham);
   if (GetParam().published_woodham_deg > 0) {
     EXPECT_NEAR(w.mean_deg, GetParam().published_woodham_deg, 0.3);
   }
+  // Leaving the clipped values out, as iphong's Woodham does, helps the least squares they bias
+  // on these objects (the ball: 4.16 -> 3.77 deg).
+  NormalOptions unclipped = woodham;
+  unclipped.saturation = NormalOptions{}.saturation;
+  const AngularErrorMetrics u = Run(unclipped);
+  RecordProperty("woodham_unclipped_mean_deg", std::to_string(u.mean_deg));
+  EXPECT_LE(u.mean_deg, w.mean_deg + 1e-6);
   const AngularErrorMetrics p = Run(NormalOptions{});
   RecordProperty("woodham_mean_deg", std::to_string(w.mean_deg));
   RecordProperty("phong_mean_deg", std::to_string(p.mean_deg));
