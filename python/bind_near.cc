@@ -109,7 +109,8 @@ py::dict DistanceDict(const near::EffectiveDistanceResult& r) {
                                                     ? py::object(py::none())
                                                     : py::float_(r.model_loss_error),
                   py::arg("position_checks") = position_checks, py::arg("candidates") = candidates,
-                  py::arg("passes") = passes, py::arg("seconds") = r.seconds);
+                  py::arg("passes") = passes, py::arg("foil_refit") = r.foil_refit,
+                  py::arg("seconds") = r.seconds);
 }
 
 double EffectiveDistanceFrom(const py::object& value) {
@@ -192,9 +193,24 @@ namespace {
 
 // A near pass's lights as plain arrays (float64: the same bits on a Dask worker): each point
 // light's position and power (Light::Point with the inverse square), the reference directions
-// and intensities (solve::SetReferenceLights), and the surface points in masked order.
+// and intensities (solve::SetReferenceLights), and the surface points in masked order. Distant
+// lights (the foil's refit at D = ∞): no positions, powers or points.
 py::dict NearLightsDict(const solve::PhotometricData& near) {
   const std::size_t k = near.point_lights.size(), n = near.points_cam.size();
+  if (k == 0) {
+    const std::size_t lights = near.light_directions.size();
+    py::array_t<double> directions({lights, std::size_t{3}}), intensities({lights, std::size_t{3}});
+    for (std::size_t j = 0; j < lights; ++j) {
+      for (int c = 0; c < 3; ++c) {
+        directions.mutable_at(j, c) = near.light_directions[j][c];
+        intensities.mutable_at(j, c) = near.light_intensities[j][c];
+      }
+    }
+    const auto none = [] { return py::array_t<double>(std::vector<py::ssize_t>{0, 3}); };
+    return py::dict(py::arg("light_positions") = none(), py::arg("light_powers") = none(),
+                    py::arg("reference_directions") = directions,
+                    py::arg("reference_intensities") = intensities, py::arg("points") = none());
+  }
   py::array_t<double> positions({k, std::size_t{3}}), powers({k, std::size_t{3}});
   py::array_t<double> directions({k, std::size_t{3}}), intensities({k, std::size_t{3}});
   py::array_t<double> points({n, std::size_t{3}});
@@ -289,6 +305,7 @@ void BindNear(py::module_& m) {
         const near::EffectiveDistanceResult r =
             near::ContinueEffectiveDistance(capture, plan, std::move(distant), e);
         py::dict out = DistanceDict(r);
+        if (r.foil_refit) out["maps"] = MapsArray(r.normals);
         if (std::isfinite(r.distance_px)) {
           out["maps"] = MapsArray(r.normals);
           out["model"] = reflectance::LobeName(r.normals.model);
@@ -323,18 +340,22 @@ and each pass's blocks refitted through refine(lights, plan, previous maps, mode
         const auto rows = [&](const char* key) { return ToRows(lights[key], k, key); };
         solve::PhotometricData data = ToObservations(images, rows("reference_directions"),
                                                      rows("reference_intensities"), mask_in);
-        const std::vector<Vec3d> positions = rows("light_positions"), powers = rows("light_powers");
-        for (std::size_t j = 0; j < k; ++j)
-          data.point_lights.push_back(reflectance::Light::Point(positions[j], powers[j], true));
-        const auto points =
-            py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(points_in);
-        if (!points || points.ndim() != 3 || points.shape(0) != data.height ||
-            points.shape(1) != data.width || points.shape(2) != 3) {
-          throw std::invalid_argument("points: expected (h, w, 3) like the block");
-        }
-        for (int p : data.pixels) {
-          const double* x = points.data() + 3 * static_cast<std::size_t>(p);
-          data.points_cam.emplace_back(x[0], x[1], x[2]);
+        // No light positions: distant lights (the foil's refit at D = ∞), points unused.
+        if (py::len(lights["light_positions"]) > 0) {
+          const std::vector<Vec3d> positions = rows("light_positions"),
+                                   powers = rows("light_powers");
+          for (std::size_t j = 0; j < k; ++j)
+            data.point_lights.push_back(reflectance::Light::Point(positions[j], powers[j], true));
+          const auto points =
+              py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(points_in);
+          if (!points || points.ndim() != 3 || points.shape(0) != data.height ||
+              points.shape(1) != data.width || points.shape(2) != 3) {
+            throw std::invalid_argument("points: expected (h, w, 3) like the block");
+          }
+          for (int p : data.pixels) {
+            const double* x = points.data() + 3 * static_cast<std::size_t>(p);
+            data.points_cam.emplace_back(x[0], x[1], x[2]);
+          }
         }
         const bool specular = plan.options.model != reflectance::Lobe::kLambert;
         const solve::NormalResult previous = ResultFromMaps(previous_in, specular, model_map);

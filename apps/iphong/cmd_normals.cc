@@ -136,9 +136,9 @@ void RunNormals(const NormalsCommandOptions& o) {
     NormalsMemory memory =
         EstimateNormalsMemory(capture, NormalOptionsFor(o, capture.dataset()), o.common.threads);
     // The effective light distance's whole-field part (the surface, two passes' results), in
-    // memory as in bands.
-    const bool sought = o.light_distance != "inf" && capture.dataset().filenames.size() >= 3 &&
-                        !capture.dataset().files.near.present();
+    // memory as in bands; with --light-distance inf too, for the foil's refit at D = ∞.
+    const bool sought =
+        capture.dataset().filenames.size() >= 3 && !capture.dataset().files.near.present();
     if (sought) {
       memory.field_bytes = static_cast<double>(capture.dataset().mask.count()) *
                            near::kEffectiveDistanceBytesPerPixel;

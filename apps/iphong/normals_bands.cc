@@ -194,7 +194,7 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
       near::EffectiveDistanceOptions e = EffectiveDistanceOptionsFor(o, options);
       const near::EffectiveDistanceResult r =
           near::SolveEffectiveDistanceInBands(source, band_rows, e, band_progress);
-      effective_json = EffectiveDistanceJson(r);
+      if (o.light_distance != "inf") effective_json = EffectiveDistanceJson(r);
       for (int y0 = 0; y0 < height; y0 += band_rows) {
         write(y0, solve::ResultRows(r.normals, y0, std::min(height, y0 + band_rows)));
       }
@@ -258,7 +258,7 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
       {"estimated_row_bytes", memory.per_row_bytes},
       // The effective light distance's whole-field part (in the band figure when sought).
       {"effective_distance_bytes", memory.field_bytes},
-      {"effective_distance_sought", field}};
+      {"effective_distance_sought", field && o.light_distance != "inf"}};
   metrics["sample_seconds"] = result.summary.init_seconds;
   metrics["model_seconds"] = result.summary.model_seconds;
   metrics["solve_seconds"] = result.summary.solve_seconds;

@@ -91,9 +91,9 @@ solve::NormalOptions NormalOptionsFor(const NormalsCommandOptions& o, const io::
 // Normals in bands of `band_rows` rows (solve/bands.h), each band's results written as it is
 // done: normals.exr/.png, albedo.exr, residual.exr, specular.exr, model.exr; then albedo.png from
 // the written albedo.exr, material.json and metrics.json. Commits `out`.
-// `field`: the effective light distance is sought (near::SolveEffectiveDistanceInBands, the
-// in-memory run's result); false when --light-distance inf, or when its whole-field part would
-// not fit (distant lights, with a warning).
+// `field`: the run goes through near::SolveEffectiveDistanceInBands (the in-memory run's result:
+// the choice of D, or with --light-distance inf the foil's refit at D = ∞); false when its
+// whole-field part would not fit (distant lights and no refit, with a warning unless inf).
 void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
                        io::CaptureBands& capture, int band_rows, const NormalsMemory& memory,
                        bool field, double started_seconds_ago);

@@ -198,6 +198,7 @@ nlohmann::json EffectiveDistanceJson(const near::EffectiveDistanceResult& r) {
           {"position_checks", position_checks},
           {"candidates", candidates},
           {"passes", passes},
+          {"foil_refit", r.foil_refit},
           {"distant_seconds", r.distant_seconds},
           {"choice_seconds", r.choice_seconds},
           {"seconds", r.seconds}};

@@ -60,7 +60,9 @@ def _effective_distance(images, mask_np, mask_da, masked, directions, intensitie
 
     def refine(lights, near_plan, previous, model_map):
         points = _np.zeros((h * w, 3))
-        points[masked] = lights.pop("points")
+        surface = lights.pop("points")
+        if len(surface):  # none for distant lights (the foil's refit at D = inf)
+            points[masked] = surface
         points = da.from_array(points.reshape(h, w, 3), chunks=(*chunks, 3))
         before = da.from_array(previous, chunks=(*chunks, 11))
         blocks = da.blockwise(_refine_block, "hwc", images, "khwd", mask_da, "hw", near_plan, None,
@@ -165,7 +167,9 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
                            new_axes={"c": 11}, concatenate=True, dtype=_np.float32,
                            meta=_np.empty((0, 0, 0), _np.float32))
     effective = None
-    if light_distance != "inf" and k >= 3:
+    # Distant lights asked for stay lazy, except with the foil, which is refitted at D = inf as
+    # in memory (the effective distance's foil_refit).
+    if k >= 3 and (light_distance != "inf" or plan["options"]["model"] == "normal-centred"):
         stacked, effective = _effective_distance(
             images, mask_np, mask_da, masked, directions, intensities, plan, stacked.compute(),
             model, material, discard_dark, discard_bright, fast, shadow_threshold, plan_sample,
@@ -179,7 +183,7 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     if effective is not None:
         maps = effective.pop("maps", None)
         out["effective_distance"] = effective
-        if maps is not None:  # a finite distance: the last near pass's result
+        if maps is not None and "height" in effective:  # a finite D: the last near pass's
             for key in ("model", "shininess", "code_offset"):
                 out[key] = effective.pop(key)
             out["ambient_term"] = _np.asarray(effective.pop("ambient_term"))

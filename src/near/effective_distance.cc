@@ -129,6 +129,7 @@ EffectiveDistanceResult SolveEffectiveDistance(const PhotometricData& data,
   std::optional<PhotometricData> near;
   capture.refine = [&](const PhotometricData& near_layout, const solve::NormalPlan& near_plan,
                        const solve::NormalResult& previous) {
+    if (&near_layout == &data) return solve::RefineNormalsWithPlan(data, near_plan, previous);
     if (!near) near = data;
     WithLightsOf(*near, near_layout);
     return solve::RefineNormalsWithPlan(*near, near_plan, previous);
@@ -155,7 +156,39 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
       solve::PlanSampleIndices(pixels, o.normals.plan_sample);
   result.distant = std::move(distant);
   result.normals = result.distant;
+  // At D = ∞ the foil (model_choice.h) is the only term that carries what distant Lambert lacks —
+  // irradiance fall-off, a diffuse term of another shape — and that is a property of the whole
+  // object, not of a material in places: the per-pixel test's choice between two diffuse shapes
+  // hands pixels back to the model the object's choice rejected. Every pixel is refitted with the
+  // foil from its normal (warm, no search). The choice of D below still reads the distant solve
+  // with the test: with it off everywhere, that one-standard-error choice flipped.
+  const auto finish_distant = [&] {
+    if (plan.options.model != reflectance::Lobe::kNormalCentred ||
+        result.distant.model_map.pixels.empty()) {
+      return;
+    }
+    solve::NormalResult from = result.distant;
+    from.model_map = ImageF();
+    const auto refit_start = Clock::now();
+    result.normals = capture.refine(data, plan, from);
+    result.foil_refit = true;
+    {
+      solve::NormalSummary summary = result.distant.summary;  // the refit is part of the solve
+      summary.solve_seconds += result.normals.summary.solve_seconds;
+      summary.iterations += result.normals.summary.iterations;
+      result.normals.summary = summary;
+    }
+    std::vector<Vec3f> sample_ks;
+    solve::AppendSampleSpecular(result.normals, data, plan_sample, sample_ks);
+    solve::FinishNormals(result.normals, plan, sample_ks);
+    char line[160];
+    std::snprintf(line, sizeof line,
+                  "distant lights with the foil: every pixel refitted with it, %.2f s",
+                  SecondsSince(refit_start));
+    say(line);
+  };
   if (std::isinf(o.distance_px)) {
+    finish_distant();
     result.seconds = SecondsSince(start);
     return result;
   }
@@ -411,6 +444,7 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
   result.choice_seconds = SecondsSince(choice_start);
   result.distance_px = distance;
   if (std::isinf(distance)) {
+    finish_distant();
     result.seconds = SecondsSince(start);
     return result;
   }

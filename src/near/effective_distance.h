@@ -17,7 +17,9 @@
 // predict better than points placed by their normals (PositionCheck): near lights act by where
 // points are, a fit's misfit by which way they face.
 // With a finite D the model is chosen again (warm) with its lights, and the loop refines every
-// pixel from its distant normal, integrating and refining until the normals settle.
+// pixel from its distant normal, integrating and refining until the normals settle. At D = ∞
+// (chosen or given) with the foil kept, every pixel is refitted with the foil from its distant
+// normal, the per-pixel test's choice undone (foil_refit).
 #pragma once
 
 #include <functional>
@@ -88,6 +90,9 @@ struct EffectiveDistanceResult {
   // object's model too).
   std::vector<PositionCheck> position_checks;
   bool chosen = false;  // false: given (distance_px), not chosen
+  // D = ∞ with the foil: `normals` is the distant solve refitted with the foil at every pixel, the
+  // per-pixel test's choice undone (ContinueEffectiveDistance says why).
+  bool foil_refit = false;
   std::vector<NearPass> passes;
   ImageF height;  // 1 channel: the last surface's heights in pixels (NaN outside), finite D only
   double distant_seconds = 0, choice_seconds = 0, seconds = 0;

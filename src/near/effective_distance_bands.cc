@@ -93,9 +93,11 @@ EffectiveDistanceResult SolveEffectiveDistanceInBands(const solve::BandSource& s
       band.point_lights = near_layout.point_lights;
       band.light_directions = near_layout.light_directions;
       band.light_intensities = near_layout.light_intensities;
-      band.points_cam.assign(
-          near_layout.points_cam.begin() + std::ptrdiff_t(position),
-          near_layout.points_cam.begin() + std::ptrdiff_t(position + band.pixel_count()));
+      if (!near_layout.points_cam.empty()) {  // empty: distant lights (the foil's refit)
+        band.points_cam.assign(
+            near_layout.points_cam.begin() + std::ptrdiff_t(position),
+            near_layout.points_cam.begin() + std::ptrdiff_t(position + band.pixel_count()));
+      }
       position += band.pixel_count();
       solve::NormalResult r =
           solve::RefineNormalsWithPlan(band, near_plan, solve::ResultRows(previous, y0, y1));
