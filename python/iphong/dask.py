@@ -91,15 +91,16 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     estimate_normals reports it.
     light_distance: as iphong.estimate_normals: 'auto' (default) chooses an effective light
     distance when the images say the lights are near (DiLiGenT's cat, ball and harvest do), 'inf'
-    keeps them distant, a number (pixels) gives it. Except with 'inf', the distant maps are
-    computed here (the surface that places each pixel's lights needs the whole normal map), D is
-    chosen on the same pixels as in memory, and each near pass maps the blocks again; the maps
-    returned are then in memory, wrapped as dask arrays with the images' chunks, and equal to
+    keeps them distant, a number (pixels) gives it. Except with 'inf' (unless the plan keeps the
+    foil, which is then refitted at every pixel as in memory), the distant maps are computed here
+    (the surface that places each pixel's lights needs the whole normal map), D is chosen on the
+    same pixels as in memory, and each near pass maps the blocks again; the maps returned are
+    then in memory, wrapped as dask arrays with the images' chunks, and equal to
     iphong.estimate_normals' bit for bit; r['effective_distance'] says what was chosen. With
-    'inf' everything stays lazy. weigh_by_shading: as iphong.estimate_normals. Integer images
-    (uint8, uint16) need encoding='linear' or 'srgb', as in iphong.estimate_normals (scaled to
-    [0, 1], the sRGB curve undone; each block lazily); float images with encoding='srgb' are
-    linearized.
+    'inf' and no foil everything stays lazy. weigh_by_shading: as iphong.estimate_normals.
+    Integer images (uint8, uint16) need encoding='linear' or 'srgb', as in
+    iphong.estimate_normals (scaled to [0, 1], the sRGB curve undone; each block lazily); float
+    images with encoding='srgb' are linearized.
     Raises ValueError for inconsistent shapes or chunks over K or the colour axis.
     """
     import dask
