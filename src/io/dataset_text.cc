@@ -311,8 +311,8 @@ LightFile ParseAliceVisionJson(const std::string& text, const std::string& sourc
     const Vec3d d = light.Field("direction").Vector3();
     file.directions.push_back(Vec3d(d[0], -d[1], -d[2]));  // y down, z away → y up, z toward
     const Vec3d e = light.Rgb("intensity", Vec3d::Ones());
-    if (!(e.array() > 0).all() || !(e.array() <= 1e30).all()) {
-      light.Field("intensity").Fail("must be > 0 and at most 1e30");
+    if (!solve::LightIntensityInRange(e)) {
+      light.Field("intensity").Fail("must be between 1e-30 and 1e30");
     }
     file.intensities.push_back(e);
   }
@@ -399,8 +399,8 @@ std::vector<Vec3d> ParseLightIntensities(const std::string& text, const std::str
                                          std::size_t expected) {
   std::vector<Vec3d> intensities = ParseTriples(text, source, expected);
   for (std::size_t i = 0; i < intensities.size(); ++i) {
-    if (!(intensities[i].array() > 0).all() || !(intensities[i].array() <= 1e30).all()) {
-      Fail(source, "light intensities must be > 0 and at most 1e30", static_cast<int>(i + 1));
+    if (!solve::LightIntensityInRange(intensities[i])) {
+      Fail(source, "light intensities must be between 1e-30 and 1e30", static_cast<int>(i + 1));
     }
   }
   return intensities;

@@ -81,7 +81,7 @@ LightFile ParseLightFile(const std::string& text, const std::string& source, std
                          std::vector<std::string>* warnings, std::size_t max_lights = 100000);
 
 // Light directions: non-zero, normalized (lengths off 1 by more than 1e-3 are reported in
-// `warnings`). Intensities: each channel in (0, 1e30].
+// `warnings`). Intensities: each channel in [1e-30, 1e30] (solve::LightIntensityInRange).
 std::vector<Vec3d> ParseLightDirections(const std::string& text, const std::string& source,
                                         std::size_t expected, std::vector<std::string>* warnings);
 std::vector<Vec3d> ParseLightIntensities(const std::string& text, const std::string& source,

@@ -34,8 +34,8 @@ std::string PhotometricData::Validate() const {
     if (!light_directions[j].allFinite() || std::abs(light_directions[j].norm() - 1) > 1e-6) {
       return "light direction " + std::to_string(j + 1) + " is not a finite unit vector";
     }
-    if (!light_intensities[j].allFinite() || !(light_intensities[j].array() > 0).all()) {
-      return "light intensity " + std::to_string(j + 1) + " must be finite and > 0";
+    if (!LightIntensityInRange(light_intensities[j])) {
+      return "light intensity " + std::to_string(j + 1) + " must be between 1e-30 and 1e30";
     }
   }
   if (values.size() != pixels.size() * images * 3) return "observation array has the wrong size";
@@ -106,7 +106,7 @@ void SetReferenceLights(PhotometricData& data, const Vec3d& reference_cam) {
     // its own intensity there, so the shared intensities stay valid.
     data.light_intensities[j] = (irradiance.array() > 0).all()
                                     ? irradiance
-                                    : Vec3d(light.diffuse_intensity.cwiseMax(1e-300));
+                                    : Vec3d(light.diffuse_intensity.cwiseMax(kMinLightIntensity));
   }
 }
 

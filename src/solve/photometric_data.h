@@ -23,6 +23,13 @@
 
 namespace iphong::solve {
 
+// Light intensities are relative; each channel lies in [1e-30, 1e30], so that observations
+// divided by them stay finite in float (1e-300 gave infinite albedo and NaN normals).
+constexpr double kMinLightIntensity = 1e-30, kMaxLightIntensity = 1e30;
+inline bool LightIntensityInRange(const Vec3d& e) {
+  return (e.array() >= kMinLightIntensity).all() && (e.array() <= kMaxLightIntensity).all();
+}
+
 struct PhotometricData {
   int width = 0;
   int height = 0;

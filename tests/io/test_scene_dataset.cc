@@ -212,8 +212,8 @@ TEST_F(BadDataset, NanInLightFileNamesTheLine) {
 
 TEST_F(BadDataset, ZeroIntensityIsAnError) {
   Write("d/light_intensities.txt", "1 1 1\n1 0 1\n");
-  EXPECT_EQ(LoadError(),
-            Path("d/light_intensities.txt") + ":2: light intensities must be > 0 and at most 1e30");
+  EXPECT_EQ(LoadError(), Path("d/light_intensities.txt") +
+                             ":2: light intensities must be between 1e-30 and 1e30");
 }
 
 TEST_F(BadDataset, UnnormalizedDirectionsAreNormalizedWithAWarning) {
