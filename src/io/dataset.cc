@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 
 #include "core/errors.h"
@@ -244,6 +245,10 @@ ImageF WorkingRows(const Prepared& p, ImageF rows, int skip, int count, int file
       const float* v = rows.pixels.data() + 3 * q;
       if (v[0] == 0 && v[1] == 0 && v[2] == 0) ++counts->black;
       if (p.integer_files && (v[0] >= 1 || v[1] >= 1 || v[2] >= 1)) ++counts->saturated;
+      unsigned char bytes[3 * sizeof(float)];
+      std::memcpy(bytes, v, sizeof bytes);
+      for (unsigned char byte : bytes)
+        counts->masked_hash = (counts->masked_hash ^ byte) * 1099511628211ull;
     }
     counts->pixels = p.counted_pixels;
   }
@@ -353,6 +358,32 @@ std::string DescribeImageCounts(const Dataset& d) {
                   100 * black_fraction);
     text += (text.empty() ? "" : "; ") + std::string(line);
     if (d.files.mask_path.empty()) text += " (there is no mask: the background counts; --mask)";
+  }
+  // Images identical inside the mask: the first of each group and how many repeat it.
+  std::size_t repeats = 0, groups = 0, first_a = 0, first_b = 0;
+  std::vector<bool> counted(d.image_counts.size(), false);
+  for (std::size_t a = 0; a < d.image_counts.size(); ++a) {
+    if (counted[a] || d.image_counts[a].pixels == 0) continue;
+    std::size_t same = 0;
+    for (std::size_t b = a + 1; b < d.image_counts.size(); ++b) {
+      // One file listed twice is named by the capture's own warning (capture.cc).
+      if (counted[b] || d.image_counts[b].pixels != d.image_counts[a].pixels ||
+          d.image_counts[b].masked_hash != d.image_counts[a].masked_hash ||
+          d.filenames[b] == d.filenames[a]) {
+        continue;
+      }
+      counted[b] = true;
+      if (same++ == 0 && groups == 0) first_a = a, first_b = b;
+    }
+    if (same > 0) ++groups, repeats += same;
+  }
+  if (repeats > 0 && repeats + 1 < d.image_counts.size()) {
+    std::snprintf(line, sizeof line,
+                  "%zu of %zu images repeat another pixel for pixel inside the mask (%s and %s "
+                  "are identical): one photo saved under two names? Each light needs its own",
+                  repeats, d.image_counts.size(), d.filenames[first_a].c_str(),
+                  d.filenames[first_b].c_str());
+    text += (text.empty() ? "" : "; ") + std::string(line);
   }
   return text;
 }

@@ -11,6 +11,8 @@
 // io/dataset_write.h; Normal_gt.mat is read and written by io/normal_mat.h.
 #pragma once
 
+#include <cstdint>
+
 #include <functional>
 #include <optional>
 #include <string>
@@ -28,6 +30,8 @@ namespace iphong::io {
 struct ImageCounts {
   std::size_t pixels = 0, saturated = 0, black = 0;
   int orientation = 1;  // the EXIF orientation the file states (io/image_io.h)
+  // FNV-1a of the stored values inside the mask, row by row: equal for images identical there.
+  std::uint64_t masked_hash = 14695981039346656037ull;
 };
 
 struct Dataset {
@@ -71,7 +75,8 @@ struct DatasetLoadOptions {
 std::string DescribeDataset(const Dataset& dataset);
 
 // "" or one line on the images with clipped pixels (over 1% of the mask) or black ones (over 10%:
-// cast shadows alone make a few percent).
+// cast shadows alone make a few percent), and on images identical inside the mask (one photo
+// under two names; images identical everywhere are refused by the solver's plan).
 std::string DescribeImageCounts(const Dataset& dataset);
 
 // Reads a dataset directory. Throws std::runtime_error whose one-line message names the file

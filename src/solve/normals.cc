@@ -181,6 +181,22 @@ NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& optio
   if (starts && starts->size() != sample.pixel_count()) {
     throw std::invalid_argument("plan: one start per pixel of the sample needed");
   }
+  if (sample.images > 1 && sample.pixel_count() > 0) {
+    // Images identical at every pixel carry no shading: the light did not change between them.
+    const std::size_t k3 = static_cast<std::size_t>(sample.images) * 3;
+    bool varies = false;
+    for (std::size_t i = 0; i < sample.pixel_count() && !varies; ++i) {
+      const float* v = sample.pixel(i);
+      for (std::size_t c = 3; c < k3 && !varies; ++c) varies = v[c] != v[c % 3];
+    }
+    if (!varies) {
+      throw std::invalid_argument(
+          "the " + std::to_string(sample.images) + " images are the same at each of the " +
+          std::to_string(sample.pixel_count()) +
+          " pixels sampled (the light did not change between the photographs, or one photo was "
+          "saved under every name): no normal can be recovered");
+    }
+  }
   NormalPlan plan;
   plan.options = options;
   plan.requested_model = options.model;

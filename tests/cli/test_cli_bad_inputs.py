@@ -87,7 +87,13 @@ def nan_light(ds):
 
 def huge_intensity(ds):
     replace_line(ds / "light_intensities.txt", 1, "1e308 1 1")
-    return 1, r"light intensities must be > 0 and at most 1e30", "ds/light_intensities.txt:2"
+    return 1, r"light intensities must be between 1e-30 and 1e30", "ds/light_intensities.txt:2"
+
+
+def tiny_intensity(ds):
+    # 1e-300 went through: the observations divided by it overflow float (albedo inf, 45 deg off).
+    replace_line(ds / "light_intensities.txt", 1, "1e-300 1 1")
+    return 1, r"light intensities must be between 1e-30 and 1e30", "ds/light_intensities.txt:2"
 
 
 def zero_direction(ds):
@@ -231,7 +237,7 @@ def one_image_unknown_albedo(ds):
 
 
 DATASET_CASES = [
-    short_light_file, nan_light, huge_intensity, zero_direction, denormal_direction,
+    short_light_file, nan_light, huge_intensity, tiny_intensity, zero_direction, denormal_direction,
     garbage_light_file,
     coplanar_lights, black_mask,
     fifo_light_file, folder_as_light_file, empty_filenames, missing_filenames, missing_image,
@@ -416,6 +422,33 @@ def test_an_image_listed_for_two_lights_is_named(rendered, tmp_path):
     assert err.splitlines() == [
         f"iphong: warning: {ds}/filenames.txt: lists 005.png 2 times (2 of 12 entries name an "
         "image listed more than once): each light needs its own photograph"]
+
+
+def test_one_photo_under_two_names_is_named_and_one_photo_under_every_name_refused(rendered,
+                                                                                    tmp_path):
+    """A photo copied over another (two names, one content) gives that light no shading of its
+    own: said, with the pair. Every image the same carries no shading at all: refused, nothing
+    written (the solve gave 56 degrees behind exit 0)."""
+    ds = user_copy(rendered, tmp_path / "ds")
+    (ds / "006.png").unlink()
+    shutil.copy(ds / "005.png", ds / "006.png")
+    code, _, err = run("normals", ds, "-o", tmp_path / "out")
+    assert code == 0, err
+    assert err.splitlines() == [
+        "iphong: warning: 1 of 12 images repeat another pixel for pixel inside the mask (005.png "
+        "and 006.png are identical): one photo saved under two names? Each light needs its own"]
+    pixels = json.loads((tmp_path / "out" / "metrics.json").read_text())["pixels"]
+    for name in (ds / "filenames.txt").read_text().split():
+        if name != "005.png":
+            (ds / name).unlink()
+            shutil.copy(ds / "005.png", ds / name)
+    code, _, err = run("normals", ds, "-o", tmp_path / "same")
+    assert code == 1
+    assert err.splitlines() == [
+        f"iphong: error: {ds}: the 12 images are the same at each of the "
+        f"{pixels} pixels sampled (the light did not change between the photographs, or "
+        "one photo was saved under every name): no normal can be recovered"]
+    assert not (tmp_path / "same").exists()
 
 
 def test_text_files_from_windows_editors_are_read(rendered, tmp_path):

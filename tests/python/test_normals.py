@@ -75,6 +75,15 @@ def test_bad_arrays_raise_value_error():
     bad[1, 2, 2, 0] = np.nan
     with pytest.raises(ValueError, match="non-finite"):
         iphong.estimate_normals(bad, lights)
+    # One photo under every light: no shading to recover a normal from, whatever the model.
+    same = np.broadcast_to(np.linspace(0.1, 0.9, 64, dtype=np.float32).reshape(1, 8, 8, 1),
+                           (4, 8, 8, 3)).copy()
+    spread = np.array([[0.3, 0, 1], [-0.3, 0.2, 1], [0, -0.4, 1], [0.2, 0.3, 1]])
+    for model in (None, "lambert"):
+        with pytest.raises(ValueError, match="the 4 images are the same at each of the 64 pixels"):
+            iphong.estimate_normals(same, spread, model=model)
+    same[2, 3, 3, 1] += 0.01  # one value differs: solved
+    assert iphong.estimate_normals(same, spread, model="lambert")["normals"].shape == (8, 8, 3)
 
 
 def test_dark_pixels_give_flags_not_nan():
