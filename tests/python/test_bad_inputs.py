@@ -60,12 +60,15 @@ def test_one_image_is_refused_when_its_global_solve_would_not_fit():
 
 def test_height_to_mesh_with_zero_intrinsics():
     height = np.zeros((4, 4), np.float32)
-    with pytest.raises(ValueError, match="intrinsics need finite fx, fy > 0"):
+    with pytest.raises(ValueError, match="intrinsics need fx, fy between 1e-12 and 1e12"):
         iphong.height_to_mesh(height, np.ones((4, 4), bool), intrinsics=(0, 0, 0, 0))
     with pytest.raises(TypeError, match=r"intrinsics \(fx, fy, cx, cy\): expected 4 numbers"):
         iphong.height_to_mesh(height, np.ones((4, 4), bool), intrinsics="wide")
-    with pytest.raises(ValueError, match="pixel size must be finite and > 0"):
+    with pytest.raises(ValueError, match="pixel size must be between 1e-12 and 1e12"):
         iphong.normals_from_height(height, pixel_size=0)
+    # 1e308 wrote infinite heights (and an empty mesh from the CLI) behind success.
+    with pytest.raises(ValueError, match="pixel size must be between 1e-12 and 1e12"):
+        iphong.height_to_mesh(height, np.ones((4, 4), bool), pixel_size=1e308)
 
 
 def test_render_refuses_what_would_not_fit_naming_the_knob():
