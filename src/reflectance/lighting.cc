@@ -14,8 +14,9 @@ std::string Format(const Vec3d& v) {
 }
 
 std::string CheckIntensity(const char* what, const Rgb& intensity) {
-  if (!intensity.allFinite() || (intensity.array() < 0).any()) {
-    return std::string("light ") + what + " must be finite and >= 0, got " + Format(intensity);
+  // Images are float: 1e308 rendered infinity everywhere behind success.
+  if (!intensity.allFinite() || (intensity.array() < 0).any() || (intensity.array() > 1e30).any()) {
+    return std::string("light ") + what + " must be between 0 and 1e30, got " + Format(intensity);
   }
   return "";
 }

@@ -29,6 +29,28 @@ std::string RelightInput::Validate() const {
     return "the specular scale must be finite and >= 0";
   }
   if (!(exposure > 0 && std::isfinite(exposure))) return "exposure must be finite and > 0";
+  // A pixel with a normal and a NaN albedo was left black without a word (a whole NaN map gave a
+  // black image behind success).
+  for (const auto& [map, name] :
+       {std::pair{albedo, "albedo"}, std::pair{specular, "specular map"}}) {
+    if (!map) continue;
+    std::size_t bad = 0, first = 0;
+    for (std::size_t p = 0; p < static_cast<std::size_t>(w) * h; ++p) {
+      const float* n = normals_cam->pixels.data() + 3 * p;
+      const float* v = map->pixels.data() + 3 * p;
+      if (!(std::isfinite(n[0]) && std::isfinite(n[1]) && std::isfinite(n[2])) ||
+          (n[0] == 0 && n[1] == 0 && n[2] == 0)) {
+        continue;
+      }
+      if (std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])) continue;
+      if (bad++ == 0) first = p;
+    }
+    if (bad > 0) {
+      return std::string("the ") + name + " is not finite at " + std::to_string(bad) +
+             " pixel(s) with a normal (the first at column " + std::to_string(first % w) +
+             ", row " + std::to_string(first / w) + ")";
+    }
+  }
   if (lights.empty()) return "no light";
   for (const reflectance::Light& light : lights) {
     if (light.type != reflectance::LightType::kDirectional)

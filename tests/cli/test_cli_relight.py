@@ -148,6 +148,16 @@ def test_bad_inputs(capture, tmp_path):
     for light in ("0,0,1", "0.5,0,0.87"):
         code, _, err = run("relight", n, "--light", light, "-o", mine, "--overwrite")
         assert code == 0, err
+    # Values no float image holds: an intensity of 1e308 rendered infinity everywhere, and a NaN
+    # albedo a black image, both behind exit 0.
+    assert_refused(tmp_path, ["relight", n, "--light", "0,0,1", "--intensity", "1e308", "-o",
+                              tmp_path / "big.png"], 2, r"between 0 and 1e30")
+    nan = tmp_path / "nan"
+    shutil.copytree(n, nan)
+    oiio = shutil.which("oiiotool")
+    subprocess.run([oiio, n / "albedo.exr", "--mulc", "nan", "-o", nan / "albedo.exr"], check=True)
+    assert_refused(tmp_path, ["relight", nan, "--light", "0,0,1", "-o", tmp_path / "nan.png"], 1,
+                   r"the albedo is not finite at \d+ pixel\(s\) with a normal \(the first at column")
 
 
 def test_relight_json_reports_the_run_for_scripts(tmp_path):
