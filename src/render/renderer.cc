@@ -467,6 +467,21 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
   for (std::size_t k = 0; k < images.size(); ++k) {
     ImageF image = fine ? Downsample(images[k], s, nullptr, false) : std::move(images[k]);
     ApplyNoise(image, options.noise, k);
+    // Each value is valid alone, but their products (intensity x coefficient, noise) can pass
+    // float's range: said here, as the scene's, not as an image a writer refuses.
+    std::size_t bad = 0, first = 0;
+    for (std::size_t p = 0; p < image.pixel_count(); ++p) {
+      const float* v = image.pixels.data() + image.channels * p;
+      if (std::all_of(v, v + image.channels, [](float x) { return std::isfinite(x); })) continue;
+      if (bad++ == 0) first = p;
+    }
+    if (bad > 0) {
+      throw std::invalid_argument(
+          std::string(k == 0 ? "the image" : "light " + std::to_string(k) + "'s image") +
+          " overflows float at " + std::to_string(bad) + " pixel(s) (the first at column " +
+          std::to_string(first % image.width) + ", row " + std::to_string(first / image.width) +
+          "): light intensities, ambient, coefficients or noise too large together");
+    }
     if (k == 0) {
       out.image = std::move(image);
     } else {

@@ -84,6 +84,20 @@ def test_render_refuses_what_would_not_fit_naming_the_knob():
     assert iphong.render(small, max_memory_gb=1)["image"].shape == (64, 64, 3)
 
 
+def test_render_names_values_that_overflow_together():
+    """ks 1e300 and ambient 1e300 are each a valid number; the image they make is not (float):
+    said as the scene's, where the writer named only 'image 1'."""
+    scene = {"width": 32, "height": 32, "lights": [{"direction": [0, 0, 1]}],
+             "objects": [{"shape": "sphere", "material": {"kd": 0.5, "ks": 1e300}}]}
+    with pytest.raises(ValueError, match=r"the image overflows float at \d+ pixel\(s\) \(the "
+                                         r"first at column \d+, row \d+\): light intensities"):
+        iphong.render(scene)
+    scene["objects"][0]["material"]["ks"] = 0.5
+    with pytest.raises(ValueError, match=r"the image overflows float at 1024 pixel"):
+        iphong.render(dict(scene, noise={"gaussian_sigma": 1e300, "seed": 1}), per_light=True)
+    assert np.isfinite(iphong.render(scene)["image"]).all()
+
+
 @pytest.mark.parametrize("scene, error, pattern", [
     ({"width": 4294967328, "lights": [{"direction": [0, 0, 1]}], "objects": [{"shape": "sphere"}]},
      ValueError, r"scene: width: integer out of range"),
