@@ -478,6 +478,33 @@ struct EvalOptions {
 void RunEval(const EvalOptions& o) {
   const MemoryLimit memory = o.common.memory();
   const ImageF estimate = io::ReadNormalMap(o.estimate, o.convention == "directx", nullptr, memory);
+  // An albedo handed in by mistake was scored as normals without a word (75 degrees); maps from
+  // other tools may be unnormalized (antialiased edges), so this is said, not refused, and the
+  // angles are those of the directions.
+  {
+    std::size_t with_normal = 0, off = 0, first = 0;
+    for (std::size_t p = 0; p < estimate.pixel_count(); ++p) {
+      const float* v = estimate.pixels.data() + 3 * p;
+      const double length =
+          std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
+      if (!(length > 0)) continue;
+      ++with_normal;
+      if (std::abs(length - 1) > 0.01 && off++ == 0) first = p;
+    }
+    if (2 * off > with_normal) {
+      const float* v = estimate.pixels.data() + 3 * first;
+      char line[320];
+      std::snprintf(
+          line, sizeof line,
+          "%s: %zu of %zu normals are not unit length (|n| = %.3g at column %zu, row %zu): "
+          "is it a normal map (an albedo or a picture saved as EXR reads like this)? "
+          "Scored by direction",
+          o.estimate.c_str(), off, with_normal,
+          std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]),
+          first % estimate.width, first / estimate.width);
+      Warn(line);
+    }
+  }
   ImageF truth;
   Mask mask;
   std::string truth_name = o.ground_truth;

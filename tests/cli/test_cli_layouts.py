@@ -242,6 +242,13 @@ def test_eval_reads_png_normal_maps_in_both_conventions(tmp_path):
     # DiLiGenT's own 8-bit picture of its ground truth: the quantization only.
     code, stdout, _ = run("eval", CROP_CAT / "Normal_gt.png", CROP_CAT)
     assert json.loads(stdout)["mean_angular_error_deg"] < 0.5
+    # The albedo handed in for the normals (the file next to it) is said, scored by direction.
+    code, stdout, stderr = run("eval", out / "albedo.exr", CROP_CAT)
+    assert code == 0 and json.loads(stdout)["mean_angular_error_deg"] > 30
+    assert stderr.startswith(f"iphong: warning: {out / 'albedo.exr'}: ")
+    assert "is it a normal map" in stderr
+    code, _, stderr = run("eval", out / "normals.exr", CROP_CAT)
+    assert code == 0 and stderr == ""
 
 
 def test_integrate_takes_diligent_ground_truth_without_flags(tmp_path):
