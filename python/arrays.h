@@ -136,10 +136,34 @@ inline std::vector<Vec3d> ToRows(const py::object& value, std::size_t expected, 
   return rows;
 }
 
+// Refuses an array whose float copy (and the conversion's temporary) would not fit the memory
+// limit, before the copy is made: a broadcast view of 40000 x 40000 normals was copied into
+// 19 GB and the process killed by the system, instead of an error with the figure.
+inline MemoryLimit CopyLimit() {
+  return MemoryLimit{0, "max_memory_gb= where the call takes it, or pass a smaller array"};
+}
+inline void RequireCopyFits(const py::object& value, const char* what,
+                            const MemoryLimit& memory = CopyLimit()) {
+  const py::array view = py::array::ensure(value);
+  if (!view) {
+    PyErr_Clear();
+    return;  // not array-like: the conversion says so
+  }
+  const double bytes = 2.0 * sizeof(float) * static_cast<double>(view.size());
+  if (bytes <= static_cast<double>(memory.resolved())) return;
+  std::string shape = "(";
+  for (py::ssize_t i = 0; i < view.ndim(); ++i)
+    shape += (i ? ", " : "") + std::to_string(view.shape(i));
+  shape += view.ndim() == 1 ? ",)" : ")";
+  throw std::invalid_argument(memory.Check(
+      bytes, std::string(what) + ": copying an array of shape " + shape + " to float32"));
+}
+
 // From numpy: a mask (None = everything) of shape (H, W), or (H, W, C) as a picture stores it
 // (a pixel is inside where any channel is non-zero), and a (H, W, 3) float image.
 inline Mask ToMask(const py::object& value, int width, int height) {
   if (value.is_none()) return Mask(width, height, true);
+  RequireCopyFits(value, "mask");
   auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
   if (!a) PyErr_Clear();
   const bool shape_ok = a &&
@@ -157,7 +181,9 @@ inline Mask ToMask(const py::object& value, int width, int height) {
   return mask;
 }
 
-inline ImageF ToImage(const py::object& value, const char* what) {
+inline ImageF ToImage(const py::object& value, const char* what,
+                      const MemoryLimit& memory = CopyLimit()) {
+  RequireCopyFits(value, what, memory);
   auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
   if (!a) PyErr_Clear();
   if (!a || a.ndim() != 3 || a.shape(2) != 3) {
@@ -172,6 +198,7 @@ using FloatStack = py::array_t<float, py::array::c_style | py::array::forcecast>
 
 // Images (K, H, W, 3) as one float array.
 inline FloatStack ToImageStack(const py::object& value) {
+  RequireCopyFits(value, "images");
   FloatStack a = FloatStack::ensure(value);
   if (!a) PyErr_Clear();
   if (!a || a.ndim() != 4 || a.shape(3) != 3 || a.shape(0) < 1) {

@@ -9,6 +9,7 @@
 #include "geometry/height_map.h"
 #include "integrate/frame_check.h"
 #include "integrate/integrate.h"
+#include "io/surface.h"
 
 namespace py = pybind11;
 
@@ -56,8 +57,9 @@ void BindIntegrate(py::module_& m) {
       [](const py::object& normals_in, const py::object& mask_in, const std::string& method,
          const std::string& solver, double pixel_size, const py::object& intrinsics,
          const py::object& depth_prior, double prior_weight, double min_cos, bool allow_back_facing,
-         double stiffness, int threads) {
-        const ImageF normals = ToImage(normals_in, "normals");
+         double stiffness, int threads, const py::object& max_memory_gb) {
+        const MemoryLimit memory = MemoryLimitFrom(max_memory_gb);
+        const ImageF normals = ToImage(normals_in, "normals", memory);
         // No mask: the pixels with a normal (maps store 0 outside the object).
         const Mask mask = mask_in.is_none() ? NonZeroPixels(normals)
                                             : ToMask(mask_in, normals.width, normals.height);
@@ -76,6 +78,8 @@ void BindIntegrate(py::module_& m) {
         o.allow_back_facing = allow_back_facing;
         o.stiffness = stiffness;
         o.threads = threads;
+        RequireMemory(memory, io::EstimateSurfaceBytes(mask.count(), o),
+                      "integrating " + std::to_string(mask.count()) + " pixels");
         integrate::IntegrateResult r;
         {
           py::gil_scoped_release release;
@@ -108,7 +112,7 @@ void BindIntegrate(py::module_& m) {
       py::arg("solver") = "auto", py::arg("pixel_size") = 1.0, py::arg("intrinsics") = py::none(),
       py::arg("depth_prior") = py::none(), py::arg("prior_weight") = 1e-2,
       py::arg("min_cos") = 0.05, py::arg("allow_back_facing") = false, py::arg("stiffness") = 2.0,
-      py::arg("threads") = 0,
+      py::arg("threads") = 0, py::arg("max_memory_gb") = py::none(),
       R"(Heights from a normal map (H, W, 3) in the camera frame (x right, y up, z toward the viewer).
 
 method: auto (dct on a full rectangle, else quadratic), quadratic (masked least squares), dct,
@@ -119,7 +123,9 @@ Returns a dict: height (H, W) float32, NaN outside the mask (height toward the v
 pixel_size, or depth for a perspective camera), continuity (H, W, 2) edge weights to the right and
 below (0 = cut), mask, and summary (method, solver, timings, iterations, rms_residual; for
 bilateral cut_edges and separated_pixels, the pixels the cuts part from the rest of theirs).
-Raises ValueError on bad input (size mismatch, empty mask, NaN, non-unit or back-facing normals).)");
+Raises ValueError on bad input (size mismatch, empty mask, NaN, non-unit or back-facing normals)
+and when the work would need more memory than max_memory_gb (default: three quarters of the
+machine's).)");
 
   m.def(
       "height_to_mesh",

@@ -202,3 +202,19 @@ def test_a_huge_broadcast_array_is_iphongs_value_error_not_numpys_memory_error()
         iphong.estimate_normals(huge, directions)
     with pytest.raises(ValueError, match=r"more than the memory limit of 1 kB"):
         iphong.estimate_normals(huge[:, :8, :8], directions, max_memory_gb="1kB")
+
+
+def test_a_huge_array_is_refused_with_the_figure_before_it_is_copied():
+    """A broadcast view costs nothing until it is copied: 40000 x 40000 normals were copied into
+    19 GB and the process was killed by the system. Every array the module converts to float32 is
+    checked first, and integrate checks its work against max_memory_gb."""
+    huge = np.broadcast_to(np.float32([0, 0, 1]), (40000, 40000, 3))
+    with pytest.raises(ValueError, match=r"normals: copying an array of shape \(40000, 40000, 3\) "
+                                         r"to float32 needs 38.4 GB, more than the memory limit"):
+        iphong.integrate(huge, max_memory_gb=20)
+    with pytest.raises(ValueError, match=r"estimate: copying an array of shape"):
+        iphong.angular_error(huge, np.zeros((2, 2, 3)))
+    with pytest.raises(ValueError, match=r"integrating 160000 pixels needs [\d.]+ MB, more than "
+                                         r"the memory limit of 10 MB \(raise it with max_memory_gb=\)"):
+        iphong.integrate(huge[:400, :400], max_memory_gb=0.01)
+    assert iphong.integrate(huge[:400, :400])["height"].shape == (400, 400)
