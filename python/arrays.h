@@ -204,6 +204,11 @@ inline FloatStack ToImageStack(const py::object& value) {
   if (!a || a.ndim() != 4 || a.shape(3) != 3 || a.shape(0) < 1) {
     throw std::invalid_argument("images must have shape (K, H, W, 3)");
   }
+  if (a.shape(1) < 1 || a.shape(2) < 1) {
+    throw std::invalid_argument("images: shape (" + std::to_string(a.shape(0)) + ", " +
+                                std::to_string(a.shape(1)) + ", " + std::to_string(a.shape(2)) +
+                                ", 3) holds no pixel");
+  }
   return a;
 }
 

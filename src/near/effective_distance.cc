@@ -97,9 +97,8 @@ EffectiveDistanceResult SolveEffectiveDistance(const PhotometricData& data,
   if (data.near()) {
     throw std::invalid_argument("an effective distance is for lights given by direction only");
   }
-  if (data.images < 3 || data.pixel_count() == 0) {
-    throw std::invalid_argument("an effective distance needs 3 images and a pixel");
-  }
+  if (data.pixel_count() == 0) throw std::invalid_argument("the mask selects no pixel");
+  if (data.images < 3) throw std::invalid_argument("an effective distance needs 3 images");
   const std::size_t pixels = data.pixel_count();
 
   // The distant solve: its plan, its normals.

@@ -40,9 +40,8 @@ EffectiveDistanceResult SolveEffectiveDistanceInBands(const solve::BandSource& s
   };
   solve::NormalResult total =
       solve::EstimateNormalsInBands(first, band_rows, o.normals, keep, progress, &plan);
-  if (layout.images < 3 || layout.pixels.empty()) {
-    throw std::invalid_argument("an effective distance needs 3 images and a pixel");
-  }
+  if (layout.pixels.empty()) throw std::invalid_argument("the mask selects no pixel");
+  if (layout.images < 3) throw std::invalid_argument("an effective distance needs 3 images");
   {
     // The banded run's whole-object fields (ks, notes, summary) with the images pasted.
     solve::NormalResult whole = solve::ResultFields(total);

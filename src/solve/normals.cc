@@ -184,12 +184,14 @@ NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& optio
   if (sample.images > 1 && sample.pixel_count() > 0) {
     // Images identical at every pixel carry no shading: the light did not change between them.
     const std::size_t k3 = static_cast<std::size_t>(sample.images) * 3;
-    bool varies = false;
+    // Black everywhere is not this mistake: such pixels are flagged dark, as in any shadow.
+    bool varies = false, lit = false;
     for (std::size_t i = 0; i < sample.pixel_count() && !varies; ++i) {
       const float* v = sample.pixel(i);
+      lit = lit || v[0] != 0 || v[1] != 0 || v[2] != 0;
       for (std::size_t c = 3; c < k3 && !varies; ++c) varies = v[c] != v[c % 3];
     }
-    if (!varies) {
+    if (!varies && lit) {
       throw std::invalid_argument(
           "the " + std::to_string(sample.images) + " images are the same at each of the " +
           std::to_string(sample.pixel_count()) +

@@ -84,6 +84,13 @@ def test_bad_arrays_raise_value_error():
             iphong.estimate_normals(same, spread, model=model)
     same[2, 3, 3, 1] += 0.01  # one value differs: solved
     assert iphong.estimate_normals(same, spread, model="lambert")["normals"].shape == (8, 8, 3)
+    # Black at every pixel is a shadow, not that mistake: flagged dark, no normal.
+    dark = iphong.estimate_normals(np.zeros((4, 8, 8, 3), np.float32), spread)
+    assert (dark["residual"] == -1).all()
+    with pytest.raises(ValueError, match=r"^the mask selects no pixel$"):
+        iphong.estimate_normals(same, spread, mask=np.zeros((8, 8), bool))
+    with pytest.raises(ValueError, match=r"images: shape \(4, 0, 8, 3\) holds no pixel"):
+        iphong.estimate_normals(same[:, :0], spread)
 
 
 def test_dark_pixels_give_flags_not_nan():
