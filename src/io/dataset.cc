@@ -377,7 +377,13 @@ std::string DescribeImageCounts(const Dataset& d) {
     }
     if (same > 0) ++groups, repeats += same;
   }
-  if (repeats > 0 && repeats + 1 < d.image_counts.size()) {
+  if (repeats > 0 && repeats + 1 == d.image_counts.size()) {
+    std::snprintf(line, sizeof line,
+                  "all %zu images are identical inside the mask: the light did not change between "
+                  "the photographs, or one photo was saved under every name",
+                  d.image_counts.size());
+    text += (text.empty() ? "" : "; ") + std::string(line);
+  } else if (repeats > 0) {
     std::snprintf(line, sizeof line,
                   "%zu of %zu images repeat another pixel for pixel inside the mask (%s and %s "
                   "are identical): one photo saved under two names? Each light needs its own",

@@ -76,7 +76,7 @@ std::string DescribeDataset(const Dataset& dataset);
 
 // "" or one line on the images with clipped pixels (over 1% of the mask) or black ones (over 10%:
 // cast shadows alone make a few percent), and on images identical inside the mask (one photo
-// under two names; images identical everywhere are refused by the solver's plan).
+// under two names, or all of them: `normals` then refuses in its plan).
 std::string DescribeImageCounts(const Dataset& dataset);
 
 // Reads a dataset directory. Throws std::runtime_error whose one-line message names the file

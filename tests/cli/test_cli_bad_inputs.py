@@ -445,6 +445,8 @@ def test_one_photo_under_two_names_is_named_and_one_photo_under_every_name_refus
     code, _, err = run("normals", ds, "-o", tmp_path / "same")
     assert code == 1
     assert err.splitlines() == [
+        "iphong: warning: all 12 images are identical inside the mask: the light did not change "
+        "between the photographs, or one photo was saved under every name",
         f"iphong: error: {ds}: the 12 images are the same at each of the "
         f"{pixels} pixels sampled (the light did not change between the photographs, or "
         "one photo was saved under every name): no normal can be recovered"]
