@@ -43,7 +43,8 @@ std::string Shown(const std::string& line) {
 
 // Three numbers and nothing else; strtod, unlike operator>>, reads "nan" and "inf", so they get
 // their own message instead of "expected 3 numbers".
-Vec3d Triple(const std::string& line, const std::string& source, int number) {
+// `grey`: one number stands for the same value in R, G and B (a grey light's intensity).
+Vec3d Triple(const std::string& line, const std::string& source, int number, bool grey = false) {
   if (line.find('\0') != std::string::npos) Fail(source, "not a text file", number);
   Vec3d v;
   const char* p = line.c_str();
@@ -56,8 +57,13 @@ Vec3d Triple(const std::string& line, const std::string& source, int number) {
     if (count < 3) v[count] = value;
     p = end;
   }
-  if (count != 3 || std::string(p).find_first_not_of(" \t,") != std::string::npos) {
-    Fail(source, "expected 3 numbers, got '" + Shown(line) + "'", number);
+  if (grey && count == 1) v = Vec3d::Constant(v[0]);
+  if ((count != 3 && !(grey && count == 1)) ||
+      std::string(p).find_first_not_of(" \t,") != std::string::npos) {
+    Fail(source,
+         std::string(grey ? "expected 3 numbers (or 1 for a grey light)" : "expected 3 numbers") +
+             ", got '" + Shown(line) + "'",
+         number);
   }
   if (!v.allFinite()) Fail(source, "not a finite number: '" + Shown(line) + "'", number);
   return v;
@@ -397,7 +403,9 @@ std::vector<Vec3d> ParseLightDirections(const std::string& text, const std::stri
 
 std::vector<Vec3d> ParseLightIntensities(const std::string& text, const std::string& source,
                                          std::size_t expected) {
-  std::vector<Vec3d> intensities = ParseTriples(text, source, expected);
+  std::vector<Vec3d> intensities = ParseCounted<Vec3d>(
+      text, source, expected, "filenames.txt", nullptr,
+      [&](const std::string& line, int number) { return Triple(line, source, number, true); });
   for (std::size_t i = 0; i < intensities.size(); ++i) {
     if (!solve::LightIntensityInRange(intensities[i])) {
       Fail(source, "light intensities must be between 1e-30 and 1e30", static_cast<int>(i + 1));

@@ -210,6 +210,17 @@ TEST_F(BadDataset, NanInLightFileNamesTheLine) {
   EXPECT_EQ(LoadError(), Path("d/light_directions.txt") + ":2: expected 3 numbers, got '0 1'");
 }
 
+// A grey light's intensity is one number: the same in R, G and B. Two numbers are an error.
+TEST_F(BadDataset, OneIntensityPerLineIsAGreyLight) {
+  Write("d/light_intensities.txt", "2\n0.5 0.25 1\n");
+  const Dataset d = LoadDataset(Path("d"));
+  EXPECT_EQ(d.light_intensities[0], Vec3d(2, 2, 2));
+  EXPECT_EQ(d.light_intensities[1], Vec3d(0.5, 0.25, 1));
+  Write("d/light_intensities.txt", "2\n1 1\n");
+  EXPECT_EQ(LoadError(), Path("d/light_intensities.txt") +
+                             ":2: expected 3 numbers (or 1 for a grey light), got '1 1'");
+}
+
 TEST_F(BadDataset, ZeroIntensityIsAnError) {
   Write("d/light_intensities.txt", "1 1 1\n1 0 1\n");
   EXPECT_EQ(LoadError(), Path("d/light_intensities.txt") +
