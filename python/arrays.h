@@ -159,6 +159,23 @@ inline void RequireCopyFits(const py::object& value, const char* what,
       bytes, std::string(what) + ": copying an array of shape " + shape + " to float32"));
 }
 
+// Light intensities: None (all ones), (K,) grey lights (the same in R, G, B) or (K, 3).
+inline std::vector<Vec3d> ToIntensities(const py::object& value, std::size_t k) {
+  if (value.is_none()) return std::vector<Vec3d>(k, Vec3d::Ones());
+  auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(value);
+  if (!a) PyErr_Clear();
+  if (a && a.ndim() == 1 && static_cast<std::size_t>(a.shape(0)) == k) {
+    std::vector<Vec3d> rows(k);
+    for (std::size_t i = 0; i < k; ++i) rows[i] = Vec3d::Constant(a.at(i));
+    return rows;
+  }
+  if (!a || a.ndim() != 2 || a.shape(1) != 3 || static_cast<std::size_t>(a.shape(0)) != k) {
+    throw std::invalid_argument("light_intensities must have shape (" + std::to_string(k) +
+                                ", 3) or (" + std::to_string(k) + ",)");
+  }
+  return ToRows(value, k, "light_intensities");
+}
+
 // From numpy: a mask (None = everything) of shape (H, W), or (H, W, C) as a picture stores it
 // (a pixel is inside where any channel is non-zero), and a (H, W, 3) float image.
 inline Mask ToMask(const py::object& value, int width, int height) {

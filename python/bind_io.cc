@@ -162,7 +162,7 @@ void BindIo(py::module_& m) {
           l.normalize();
         }
         if (!light_intensities.is_none()) {
-          d.light_intensities = ToRows(light_intensities, k, "light_intensities");
+          d.light_intensities = ToIntensities(light_intensities, k);
         }
         const Mask mask = mask_in.is_none() ? Mask(w, h, true) : ToMask(mask_in, w, h);
         d.mask = &mask;

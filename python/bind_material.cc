@@ -61,9 +61,7 @@ void BindMaterial(py::module_& m) {
         const FloatStack images = ToImageStack(images_in);
         const std::size_t k = images.shape(0);
         const int h = static_cast<int>(images.shape(1)), w = static_cast<int>(images.shape(2));
-        const std::vector<Vec3d> intensities =
-            light_intensities.is_none() ? std::vector<Vec3d>(k, Vec3d::Ones())
-                                        : ToRows(light_intensities, k, "light_intensities");
+        const std::vector<Vec3d> intensities = ToIntensities(light_intensities, k);
         const solve::PhotometricData data =
             ToObservations(images, ToDirections(light_directions, k), intensities, mask_in);
         const ImageF normal_map = ToImage(normals_in, "normals");

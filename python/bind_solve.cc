@@ -79,10 +79,9 @@ solve::NormalOptions OptionsFrom(const py::object& model, const py::object& mate
   return options;
 }
 
-// light_intensities (K, 3), or None: all ones.
+// light_intensities (K, 3), (K,) or None: all ones.
 std::vector<Vec3d> Intensities(const py::object& light_intensities, std::size_t k) {
-  return light_intensities.is_none() ? std::vector<Vec3d>(k, Vec3d::Ones())
-                                     : ToRows(light_intensities, k, "light_intensities");
+  return ToIntensities(light_intensities, k);
 }
 
 solve::PhotometricData NoObservations(int width, int height, const py::object& light_directions,

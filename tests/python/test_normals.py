@@ -84,6 +84,13 @@ def test_bad_arrays_raise_value_error():
             iphong.estimate_normals(same, spread, model=model)
     same[2, 3, 3, 1] += 0.01  # one value differs: solved
     assert iphong.estimate_normals(same, spread, model="lambert")["normals"].shape == (8, 8, 3)
+    # Grey lights' intensities as one number each: the same as three equal ones.
+    grey = np.linspace(0.5, 2, 4)
+    a = iphong.estimate_normals(same, spread, grey, model="lambert")
+    b = iphong.estimate_normals(same, spread, np.repeat(grey[:, None], 3, 1), model="lambert")
+    np.testing.assert_array_equal(a["albedo"], b["albedo"])
+    with pytest.raises(ValueError, match=r"light_intensities must have shape \(4, 3\) or \(4,\)"):
+        iphong.estimate_normals(same, spread, np.ones((4, 2)))
     # Black at every pixel is a shadow, not that mistake: flagged dark, no normal.
     dark = iphong.estimate_normals(np.zeros((4, 8, 8, 3), np.float32), spread)
     assert (dark["residual"] == -1).all()
