@@ -189,7 +189,7 @@ void AddIntegrateCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--albedo", o->albedo, "Albedo image: mesh colours and preview");
   cmd->add_option("--pixel-size", o->options.pixel_size, "Scene units per pixel (orthographic)")
-      ->check(Positive())
+      ->check(Scale())
       ->capture_default_str();
   cmd->add_option("--intrinsics", o->intrinsics,
                   "Perspective camera fx,fy,cx,cy in pixels: integrate log depth")

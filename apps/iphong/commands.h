@@ -27,6 +27,8 @@ constexpr const char* kExitCodes =
 
 // A number > 0; the message says so (CLI11's PositiveNumber prints the whole double range).
 const CLI::Validator& Positive();
+// A scale (a pixel size, a focal length) in [1e-12, 1e12], the range float results keep.
+const CLI::Validator& Scale();
 
 // Flags most commands share.
 struct CommonOptions {

@@ -24,6 +24,19 @@ const CLI::Validator& Positive() {
   return validator;
 }
 
+const CLI::Validator& Scale() {
+  static const CLI::Validator validator(
+      [](std::string& text) -> std::string {
+        double value = 0;
+        if (!CLI::detail::lexical_cast(text, value) || !(value >= 1e-12 && value <= 1e12)) {
+          return "must be a number between 1e-12 and 1e12 (got " + text + ")";
+        }
+        return "";
+      },
+      "1e-12..1e12");
+  return validator;
+}
+
 void AddThreadsOption(CLI::App* cmd, CommonOptions& common) {
   cmd->add_option("--threads", common.threads, "Threads (0 = all cores)")
       ->check(CLI::Range(0, 1024));

@@ -323,6 +323,9 @@ def small_height(tmp_path_factory):
                                            r"filenames\.txt or \.lp\)"),
     (["calibrate-lights", "ds", "--normals", "ds/normals.exr", "-o", "out", "--saturation", "2"], 2,
      r"--saturation: must be a number in \(0, 1\] \(got 2\)"),
+    # Infinite heights and an empty mesh behind exit 0, before the range.
+    (["integrate", "ds/normals.exr", "-o", "out", "--pixel-size", "1e308"], 2,
+     r"--pixel-size: must be a number between 1e-12 and 1e12 \(got 1e308\)"),
 ])
 def test_bad_command_line(rendered, small_height, tmp_path, args, code, pattern):
     user_copy(rendered, tmp_path / "ds")
