@@ -202,9 +202,20 @@ void RunNormals(const NormalsCommandOptions& o) {
     // normals from theirs, said, and a warning past a degree.
     const std::string& source = dataset.files.intensities_source;
     if (loaded.observations.images >= 3 && dataset.files.intensities_from_file) {
-      const calibrate::IntensityComparison c =
-          calibrate::CompareIntensities(loaded.observations, loaded.observations.light_intensities,
-                                        estimated->light_intensities, NormalOptionsFor(o, dataset));
+      // Each run as this command makes it (the effective distance, and with it the foil's refit),
+      // so the figure compares the normals it would write; quiet, the two runs' lines unsaid.
+      std::function<solve::NormalResult(const solve::PhotometricData&)> whole_run;
+      if (!dataset.files.near.present()) {
+        whole_run = [&](const solve::PhotometricData& under) {
+          near::EffectiveDistanceOptions e =
+              EffectiveDistanceOptionsFor(o, NormalOptionsFor(o, dataset));
+          e.log = nullptr;
+          return near::SolveEffectiveDistance(under, e).normals;
+        };
+      }
+      const calibrate::IntensityComparison c = calibrate::CompareIntensities(
+          loaded.observations, loaded.observations.light_intensities, estimated->light_intensities,
+          NormalOptionsFor(o, dataset), whole_run);
       estimated_vs_file = {{"file", source},
                            {"median_relative_difference", c.median_relative},
                            {"max_relative_difference", c.max_relative},

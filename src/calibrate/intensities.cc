@@ -229,10 +229,10 @@ IntensityEstimate EstimateIntensities(const solve::PhotometricData& data,
   return *best;
 }
 
-IntensityComparison CompareIntensities(const solve::PhotometricData& data,
-                                       const std::vector<Rgb>& given,
-                                       const std::vector<Rgb>& estimated,
-                                       const solve::NormalOptions& options) {
+IntensityComparison CompareIntensities(
+    const solve::PhotometricData& data, const std::vector<Rgb>& given,
+    const std::vector<Rgb>& estimated, const solve::NormalOptions& options,
+    const std::function<solve::NormalResult(const solve::PhotometricData&)>& solve) {
   const auto start = Clock::now();
   const std::size_t k = static_cast<std::size_t>(data.images);
   if (given.size() != k || estimated.size() != k || k < 3) {
@@ -264,7 +264,7 @@ IntensityComparison CompareIntensities(const solve::PhotometricData& data,
   const auto run = [&](const std::vector<Rgb>& intensities) {
     solve::PhotometricData under = data;
     under.light_intensities = intensities;
-    return solve::EstimateNormals(under, options);
+    return solve ? solve(under) : solve::EstimateNormals(under, options);
   };
   const solve::NormalResult b = run(estimated);
   const solve::NormalResult a = run(scaled);

@@ -16,6 +16,8 @@
 // symmetric highlight, however close to the rim.
 #pragma once
 
+#include <functional>
+
 #include <string>
 #include <vector>
 
@@ -239,16 +241,18 @@ inline constexpr const char* kUncheckedEstimateNote =
 // apart they put the normals: a run under each (`options`, its model choice made under that set),
 // the mean angle over the pixels both solve — which bounds how much better or worse either run's
 // mean error can be than the other's. Neither run can say which set is right;
-// the normals' figure is what a user needs to hear when they disagree.
+// the normals' figure is what a user needs to hear when they disagree. `solve`, when given, is the
+// caller's whole run (the effective distance's, say), so the figure compares the runs it reports;
+// else solve::EstimateNormals with `options`.
 struct IntensityComparison {
   double median_relative = 0, max_relative = 0;
   double normals_moved_deg = 0;
   double seconds = 0;
 };
-IntensityComparison CompareIntensities(const solve::PhotometricData& data,
-                                       const std::vector<Rgb>& given,
-                                       const std::vector<Rgb>& estimated,
-                                       const solve::NormalOptions& options);
+IntensityComparison CompareIntensities(
+    const solve::PhotometricData& data, const std::vector<Rgb>& given,
+    const std::vector<Rgb>& estimated, const solve::NormalOptions& options,
+    const std::function<solve::NormalResult(const solve::PhotometricData&)>& solve = {});
 
 // Directions from two points of view: the closest point between two rays and their gap.
 Vec3d ClosestPoint(const Vec3d& origin_a, const Vec3d& dir_a, const Vec3d& origin_b,
