@@ -362,8 +362,14 @@ std::string DescribeImageCounts(const Dataset& d) {
   // Images identical inside the mask: the first of each group and how many repeat it.
   std::size_t repeats = 0, groups = 0, first_a = 0, first_b = 0;
   std::vector<bool> counted(d.image_counts.size(), false);
+  // Images black (or clipped) at every pixel are alike by nature, not copies: a dome's lights
+  // behind the object; the black and clipped counts speak for them.
+  const auto blank = [&](std::size_t j) {
+    const ImageCounts& c = d.image_counts[j];
+    return c.pixels == 0 || c.black == c.pixels || c.saturated == c.pixels;
+  };
   for (std::size_t a = 0; a < d.image_counts.size(); ++a) {
-    if (counted[a] || d.image_counts[a].pixels == 0) continue;
+    if (counted[a] || blank(a)) continue;
     std::size_t same = 0;
     for (std::size_t b = a + 1; b < d.image_counts.size(); ++b) {
       // One file listed twice is named by the capture's own warning (capture.cc).

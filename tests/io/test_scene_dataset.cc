@@ -210,6 +210,35 @@ TEST_F(BadDataset, NanInLightFileNamesTheLine) {
   EXPECT_EQ(LoadError(), Path("d/light_directions.txt") + ":2: expected 3 numbers, got '0 1'");
 }
 
+// Images identical inside the mask are named (the first pair), or "all" when every one is; images
+// black or clipped at every pixel are alike by nature (a dome's lights behind the object) and are
+// not called copies.
+TEST(ImageCounts, IdenticalImagesAreNamedAndBlankOnesAreNot) {
+  Dataset d;
+  d.filenames = {"a.png", "b.png", "c.png", "d.png", "e.png"};
+  d.image_counts.assign(5, {});
+  for (std::size_t j = 0; j < 5; ++j) {
+    d.image_counts[j].pixels = 100;
+    d.image_counts[j].masked_hash = 1000 + j;
+  }
+  EXPECT_EQ(DescribeImageCounts(d), "");
+  d.image_counts[3].masked_hash = d.image_counts[1].masked_hash;
+  EXPECT_EQ(DescribeImageCounts(d),
+            "1 of 5 images repeat another pixel for pixel inside the mask (b.png and d.png are "
+            "identical): one photo saved under two names? Each light needs its own");
+  d.image_counts[3].masked_hash = 1003;
+  for (int j : {0, 4}) {  // black everywhere: equal hashes, not copies
+    d.image_counts[j].black = 100;
+    d.image_counts[j].masked_hash = 7;
+  }
+  EXPECT_EQ(DescribeImageCounts(d).find("repeat another"), std::string::npos)
+      << DescribeImageCounts(d);
+  for (auto& c : d.image_counts) c = ImageCounts{100, 0, 0, 1, 42};
+  EXPECT_EQ(DescribeImageCounts(d),
+            "all 5 images are identical inside the mask: the light did not change between the "
+            "photographs, or one photo was saved under every name");
+}
+
 // A grey light's intensity is one number: the same in R, G and B. Two numbers are an error.
 TEST_F(BadDataset, OneIntensityPerLineIsAGreyLight) {
   Write("d/light_intensities.txt", "2\n0.5 0.25 1\n");
