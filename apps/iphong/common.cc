@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "geometry/height_map.h"
 #include "iphong/commands.h"
 #include "iphong/console.h"
 
@@ -28,7 +29,7 @@ const CLI::Validator& Scale() {
   static const CLI::Validator validator(
       [](std::string& text) -> std::string {
         double value = 0;
-        if (!CLI::detail::lexical_cast(text, value) || !(value >= 1e-12 && value <= 1e12)) {
+        if (!CLI::detail::lexical_cast(text, value) || !geometry::ScaleInRange(value)) {
           return "must be a number between 1e-12 and 1e12 (got " + text + ")";
         }
         return "";

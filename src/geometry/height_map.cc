@@ -6,11 +6,9 @@
 namespace iphong::geometry {
 
 std::string HeightMapFrame::Validate() const {
-  // Points and heights are stored in float: scales beyond 1e±12 overflow or vanish there.
-  if (!(pixel_size >= 1e-12 && pixel_size <= 1e12))
-    return "pixel size must be between 1e-12 and 1e12";
-  if (perspective && !(fx >= 1e-12 && fx <= 1e12 && fy >= 1e-12 && fy <= 1e12 &&
-                       std::isfinite(cx) && std::isfinite(cy))) {
+  if (!ScaleInRange(pixel_size)) return "pixel size must be between 1e-12 and 1e12";
+  if (perspective &&
+      !(ScaleInRange(fx) && ScaleInRange(fy) && std::isfinite(cx) && std::isfinite(cy))) {
     return "intrinsics need fx, fy between 1e-12 and 1e12 and a finite principal point (cx, cy)";
   }
   return "";

@@ -16,6 +16,10 @@
 
 namespace iphong::geometry {
 
+// A scale — pixel size, focal length — in [1e-12, 1e12]: heights and points are stored in float,
+// and beyond that they overflow or vanish there (a pixel size of 1e308 wrote infinite heights).
+inline bool ScaleInRange(double s) { return s >= 1e-12 && s <= 1e12; }
+
 struct HeightMapFrame {
   double pixel_size = 1.0;  // orthographic
   bool perspective = false;

@@ -1,5 +1,7 @@
 #include "integrate/integrate.h"
 
+#include "geometry/height_map.h"
+
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -37,13 +39,10 @@ const char* MethodName(Method method) {
 std::string IntegrateOptions::Validate() const {
   if (!(min_cos > 0 && min_cos < 1)) return "min_cos must be in (0, 1)";
   if (!(max_back_facing >= 0 && max_back_facing <= 1)) return "max_back_facing must be in [0, 1]";
-  // Heights are stored in float: scales beyond 1e±12 overflow or vanish there (1e308 wrote
-  // infinite heights and an empty mesh).
-  if (!(pixel_size >= 1e-12 && pixel_size <= 1e12))
-    return "pixel size must be between 1e-12 and 1e12";
+  if (!geometry::ScaleInRange(pixel_size)) return "pixel size must be between 1e-12 and 1e12";
   if (perspective) {
     const Intrinsics& k = intrinsics;
-    if (!(k.fx >= 1e-12 && k.fx <= 1e12 && k.fy >= 1e-12 && k.fy <= 1e12) || !std::isfinite(k.cx) ||
+    if (!(geometry::ScaleInRange(k.fx) && geometry::ScaleInRange(k.fy)) || !std::isfinite(k.cx) ||
         !std::isfinite(k.cy)) {
       return "perspective intrinsics need fx, fy between 1e-12 and 1e12 and a finite principal "
              "point";

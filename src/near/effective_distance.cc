@@ -166,10 +166,13 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
         result.distant.model_map.pixels.empty()) {
       return;
     }
-    solve::NormalResult from = result.distant;
-    from.model_map = ImageF();
+    // Without its model map the refit gives every pixel the plan's model; the map is set aside
+    // rather than the whole result copied.
+    ImageF map = std::move(result.distant.model_map);
+    result.distant.model_map = ImageF();
     const auto refit_start = Clock::now();
-    result.normals = capture.refine(data, plan, from);
+    result.normals = capture.refine(data, plan, result.distant);
+    result.distant.model_map = std::move(map);
     result.foil_refit = true;
     {
       solve::NormalSummary summary = result.distant.summary;  // the refit is part of the solve
