@@ -3,14 +3,60 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <vector>
 
 #include "core/errors.h"
 
 namespace iphong::io {
 
+namespace {
+
+// Where the parser is, for naming a repeated key: each open container, with an object's keys so
+// far and the one being read, or an array's element index.
+struct OpenContainer {
+  bool array = false;
+  long index = -1;
+  std::string key;
+  std::set<std::string> keys;
+};
+
+std::string PathOf(const std::vector<OpenContainer>& open) {
+  std::string path;
+  for (std::size_t i = 0; i + 1 < open.size(); ++i) {
+    path += open[i].array ? "[" + std::to_string(open[i].index) + "]"
+                          : (path.empty() ? "" : ".") + open[i].key;
+  }
+  return path;
+}
+
+}  // namespace
+
 nlohmann::json JsonReader::Parse(const std::string& text, const std::string& file) {
+  std::vector<OpenContainer> open;
+  using Event = nlohmann::json::parse_event_t;
+  const nlohmann::json::parser_callback_t track = [&](int, Event event, nlohmann::json& parsed) {
+    if (event == Event::object_start || event == Event::array_start || event == Event::value) {
+      if (!open.empty() && open.back().array) ++open.back().index;
+    }
+    if (event == Event::object_start || event == Event::array_start) {
+      open.push_back({event == Event::array_start, -1, "", {}});
+    } else if (event == Event::object_end || event == Event::array_end) {
+      if (!open.empty()) open.pop_back();
+    } else if (event == Event::key && !open.empty() && parsed.is_string()) {
+      OpenContainer& object = open.back();
+      object.key = parsed.get<std::string>();
+      if (!object.keys.insert(object.key).second) {
+        const std::string where = PathOf(open);
+        throw JsonError(OneLine(file + ": " + (where.empty() ? "" : where + ": ") + "the key '" +
+                                object.key +
+                                "' is given twice in one object; JSON keeps only one of "
+                                "them: remove the other"));
+      }
+    }
+    return true;
+  };
   try {
-    return nlohmann::json::parse(text);
+    return nlohmann::json::parse(text, track);
   } catch (const nlohmann::json::exception& e) {
     // nlohmann's messages: "[json.exception.parse_error.101] parse error at line 3, column 5:
     // ...", "[json.exception.out_of_range.406] number overflow parsing '1e400'".

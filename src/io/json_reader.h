@@ -21,7 +21,9 @@ class JsonReader {
   JsonReader(const nlohmann::json& value, std::string file, std::string path = "")
       : value_(value), file_(std::move(file)), path_(std::move(path)) {}
 
-  // Parses text; a syntax error names the file, line and column.
+  // Parses text; a syntax error names the file, line and column, and a key given twice in one
+  // object is an error naming it (JSON keeps one of the two silently: which one a user meant is
+  // not in the file).
   static nlohmann::json Parse(const std::string& text, const std::string& file);
 
   const nlohmann::json& value() const { return value_; }

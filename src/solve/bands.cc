@@ -125,12 +125,15 @@ NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
   total.summary.init_seconds = sample_seconds;
   total.summary.model_seconds = plan.model_seconds;
   std::vector<Vec3f> sample_ks;
+  // Without a plan sample no plan has seen the images: each band is checked for them instead.
+  ImageVariation variation;
   position = 0;
   next = sample.cbegin();
   for (int y0 = 0; y0 < source.height; y0 += band_rows) {
     const int y1 = std::min(source.height, y0 + band_rows);
     const PhotometricData band = source.read(y0, y1, !planned);
     if (!planned && y0 == 0) plan = PlanNormals(SubsetObservations(band, {}), options);
+    if (!planned) variation.Add(band);
     NormalResult r = SolveNormalsWithPlan(band, plan);
     AppendSampleSpecular(r, band, SampleInBand(next, sample.cend(), position, band.pixel_count()),
                          sample_ks);
@@ -152,6 +155,7 @@ NormalResult EstimateNormalsInBands(const BandSource& source, int band_rows,
     if (progress.rows) progress.rows(2, y1);
   }
   if (!planned) check_count();
+  variation.Check();
   FinishNormals(total, plan, sample_ks);
   if (plan_out) *plan_out = plan;
   NormalSummary& s = total.summary;

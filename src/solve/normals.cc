@@ -175,30 +175,36 @@ void NormalPlan::Use(const ModelCandidate& m) {
   model_choice.chosen = m;
 }
 
+void ImageVariation::Add(const PhotometricData& data) {
+  images_ = data.images;
+  pixels_ += data.pixel_count();
+  const std::size_t k3 = static_cast<std::size_t>(data.images) * 3;
+  for (std::size_t i = 0; i < data.pixel_count() && !varies_; ++i) {
+    const float* v = data.pixel(i);
+    lit_ = lit_ || v[0] != 0 || v[1] != 0 || v[2] != 0;
+    for (std::size_t c = 3; c < k3 && !varies_; ++c) varies_ = v[c] != v[c % 3];
+  }
+}
+
+void ImageVariation::Check() const {
+  if (images_ > 1 && pixels_ > 0 && !varies_ && lit_) {
+    throw std::invalid_argument(
+        "the " + std::to_string(images_) + " images are the same at each of the " +
+        std::to_string(pixels_) +
+        " pixels sampled (the light did not change between the photographs, or one photo was "
+        "saved under every name): no normal can be recovered");
+  }
+}
+
 NormalPlan PlanNormals(const PhotometricData& sample, const NormalOptions& options,
                        const std::vector<Vec3d>* starts) {
   CheckInputs(sample, options);
   if (starts && starts->size() != sample.pixel_count()) {
     throw std::invalid_argument("plan: one start per pixel of the sample needed");
   }
-  if (sample.images > 1 && sample.pixel_count() > 0) {
-    // Images identical at every pixel carry no shading: the light did not change between them.
-    const std::size_t k3 = static_cast<std::size_t>(sample.images) * 3;
-    // Black everywhere is not this mistake: such pixels are flagged dark, as in any shadow.
-    bool varies = false, lit = false;
-    for (std::size_t i = 0; i < sample.pixel_count() && !varies; ++i) {
-      const float* v = sample.pixel(i);
-      lit = lit || v[0] != 0 || v[1] != 0 || v[2] != 0;
-      for (std::size_t c = 3; c < k3 && !varies; ++c) varies = v[c] != v[c % 3];
-    }
-    if (!varies && lit) {
-      throw std::invalid_argument(
-          "the " + std::to_string(sample.images) + " images are the same at each of the " +
-          std::to_string(sample.pixel_count()) +
-          " pixels sampled (the light did not change between the photographs, or one photo was "
-          "saved under every name): no normal can be recovered");
-    }
-  }
+  ImageVariation variation;
+  variation.Add(sample);
+  variation.Check();
   NormalPlan plan;
   plan.options = options;
   plan.requested_model = options.model;

@@ -170,6 +170,24 @@ struct NormalPlan {
   void Use(const ModelCandidate& m);
 };
 
+// Whether the images differ anywhere, over one or more sets of observations of a capture:
+// images identical at every pixel carry no shading (the light did not change between them, or
+// one photo was saved under every name). Black everywhere is not this mistake: such pixels are
+// flagged dark, as in any shadow. PlanNormals checks its sample; bands without a plan sample
+// check every band.
+class ImageVariation {
+ public:
+  void Add(const PhotometricData& data);
+  // Throws std::invalid_argument when two or more images were added, some pixel is lit and no
+  // pixel differs between them.
+  void Check() const;
+
+ private:
+  bool varies_ = false, lit_ = false;
+  std::size_t pixels_ = 0;
+  int images_ = 0;
+};
+
 // The whole-object decisions, from the plan sample's observations. With `starts` (a normal per
 // pixel of the sample, from an earlier solve) the model choice refines them instead of searching
 // (ModelChoiceSettings::starts). Throws std::invalid_argument for invalid data or options.

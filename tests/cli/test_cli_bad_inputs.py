@@ -275,6 +275,7 @@ SCENE_CASES = [
     ("encoding_not_a_string.json", 1, r"output\.encoding: expected a string"),
     ("syntax_error.json", 1, r"parse error at line 3, column \d+"),
     ("binary_garbage.json", 1, r"parse error at line 1, column 1"),
+    ("key_given_twice.json", 1, r"objects\[0\]: the key 'radius' is given twice in one object"),
 ]
 
 
@@ -454,6 +455,14 @@ def test_one_photo_under_two_names_is_named_and_one_photo_under_every_name_refus
         f"{pixels} pixels sampled (the light did not change between the photographs, or "
         "one photo was saved under every name): no normal can be recovered"]
     assert not (tmp_path / "same").exists()
+    # In bands, with the coefficients known (no plan sample: each band is checked), the same.
+    assert (ds / "material.json").exists()  # the render's coefficients: known, read
+    for flags in (["--band-rows", "16"], ["--band-rows", "16", "--model", "lambert"]):
+        code, _, err = run("normals", ds, "-o", tmp_path / "same", *flags)
+        assert code == 1, flags
+        assert err.splitlines()[-1].startswith(
+            f"iphong: error: {ds}: the 12 images are the same at each of the "), flags
+        assert not (tmp_path / "same").exists()
 
 
 def test_text_files_from_windows_editors_are_read(rendered, tmp_path):

@@ -99,6 +99,20 @@ TEST_F(TempDir, SceneErrorsNameTheFileAndTheField) {
   EXPECT_NE(error("{\"lights\": [{\"direction\": [0, 0, 1]}],\n \"objects\": [{\"radius\": NaN}]}")
                 .find("parse error at line 2, column"),
             std::string::npos);
+  // A key given twice: JSON would keep one silently; the error names the key and where.
+  EXPECT_EQ(error(R"({"lights": [{"direction": [0,0,1]}], "objects": [{"shape": "sphere"},
+    {"shape": "sphere", "material": {"kd": 0.5, "ks": 0.2, "kd": 0.9}}]})"),
+            file +
+                "objects[1].material: the key 'kd' is given twice in one object; JSON keeps "
+                "only one of them: remove the other");
+  EXPECT_EQ(error(R"({"lights": [], "lights": [{"direction": [0,0,1]}], "objects": []})"),
+            file +
+                "the key 'lights' is given twice in one object; JSON keeps only one of them: "
+                "remove the other");
+  // The same key in two objects, or at two depths, is not repeated.
+  EXPECT_EQ(error(R"({"lights": [{"direction": [0,0,1]}], "objects": [{"shape": "sphere",
+    "name": "a"}, {"shape": "sphere", "name": "b"}]})"),
+            "(no error)");
   EXPECT_EQ(ErrorOf([&] { LoadSceneFile(Path("absent.json")); }),
             Path("absent.json") + ": no such file");
 }

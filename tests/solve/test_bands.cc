@@ -153,6 +153,36 @@ TEST(Bands, WoodhamAndKnownCoefficientsReadOnce) {
   }
 }
 
+// Images identical at every pixel are refused in bands as in one piece, also where no plan sample
+// is drawn (known coefficients: one pass, each band checked).
+TEST(Bands, RefuseIdenticalImagesWithoutAPlanSample) {
+  Capture c = MakeCapture();
+  for (ImageF& image : c.out.per_light) image = c.out.per_light[0];
+  NormalOptions known;
+  known.material_known = true;
+  known.ks = Vec3d::Constant(0.3);
+  known.shininess = 30;
+  std::string whole_error;
+  try {
+    EstimateNormals(Band(c, 0, c.size), known);
+  } catch (const std::invalid_argument& e) {
+    whole_error = e.what();
+  }
+  EXPECT_NE(whole_error.find("images are the same at each of the"), std::string::npos);
+  BandSource source;
+  source.width = c.size;
+  source.height = c.size;
+  source.masked_pixels = c.out.mask.count();
+  source.read = [&](int y0, int y1, bool) { return Band(c, y0, y1); };
+  std::string banded_error;
+  try {
+    EstimateNormalsInBands(source, 9, known, [](int, const NormalResult&) {});
+  } catch (const std::invalid_argument& e) {
+    banded_error = e.what();
+  }
+  EXPECT_EQ(banded_error, whole_error);
+}
+
 TEST(Bands, PlanSampleIsEvenAndComplete) {
   const std::vector<std::size_t> all = PlanSampleIndices(10, 131072);
   ASSERT_EQ(all.size(), 10u);
