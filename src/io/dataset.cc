@@ -253,6 +253,14 @@ ImageF WorkingRows(const Prepared& p, ImageF rows, int skip, int count, int file
     counts->pixels = p.counted_pixels;
   }
   if (p.srgb) LinearizeSrgb(rows);
+  if (counts) {
+    const std::size_t first = static_cast<std::size_t>(file_y0) * rows.width;
+    for (std::size_t q = 0; q < rows.pixel_count(); ++q) {
+      if (!p.file_mask.inside[first + q]) continue;
+      const float* v = rows.pixels.data() + 3 * q;
+      counts->linear_sum += (double(v[0]) + v[1] + v[2]) / 3;
+    }
+  }
   return DownscaleImage(rows, downscale);
 }
 
@@ -326,7 +334,7 @@ std::string DescribeImageCounts(const Dataset& d) {
     if (b > black_fraction) black_fraction = b, worst_black = j;
   }
   std::string text;
-  char line[256];
+  char line[512];  // file names are part of it
   std::size_t turned = 0, first_turned = 0;
   for (std::size_t j = 0; j < d.image_counts.size(); ++j) {
     if (d.image_counts[j].pixels > 0 && d.image_counts[j].orientation != d.orientation) {
@@ -358,6 +366,46 @@ std::string DescribeImageCounts(const Dataset& d) {
                   100 * black_fraction);
     text += (text.empty() ? "" : "; ") + std::string(line);
     if (d.files.mask_path.empty()) text += " (there is no mask: the background counts; --mask)";
+  }
+  // Each image's mean inside the mask over its light's intensity is its light's mean shading
+  // times the albedo: on every shared capture (DiLiGenT, UW with its chrome sphere, the rendered
+  // bunny) the brightest image is within 1.41 times the median's. A hundred times is no shading:
+  // a photo at another exposure, or stored in other units (0–255 among 0–1).
+  std::vector<double> brightness;
+  for (std::size_t j = 0; j < d.image_counts.size(); ++j) {
+    const ImageCounts& c = d.image_counts[j];
+    const double e = j < d.light_intensities.size() ? d.light_intensities[j].mean() : 1.0;
+    brightness.push_back(c.pixels > 0 && e > 0 ? c.linear_sum / c.pixels / e : 0.0);
+  }
+  if (!brightness.empty()) {
+    std::vector<double> sorted = brightness;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    const double median = sorted[sorted.size() / 2];
+    std::size_t bright = 0, brightest = 0, negative = 0, first_negative = 0;
+    for (std::size_t j = 0; j < brightness.size(); ++j) {
+      if (median > 0 && brightness[j] > kBrightImageRatio * median) {
+        if (bright++ == 0 || brightness[j] > brightness[brightest]) brightest = j;
+      }
+      if (d.image_counts[j].linear_sum < 0 && negative++ == 0) first_negative = j;
+    }
+    if (bright > 0) {
+      std::snprintf(line, sizeof line,
+                    "%zu of %zu images are more than %g times as bright as the median image, "
+                    "after their lights' intensities (most: %s, %.3g times): a photo at another "
+                    "exposure, or stored in other units (0-255 among 0-1)? Give its intensity "
+                    "(--intensities) or convert it",
+                    bright, brightness.size(), kBrightImageRatio, d.filenames[brightest].c_str(),
+                    brightness[brightest] / median);
+      text += (text.empty() ? "" : "; ") + std::string(line);
+    }
+    if (negative > 0) {
+      std::snprintf(line, sizeof line,
+                    "%zu of %zu images are negative on average inside the mask (first: %s): a "
+                    "black level subtracted twice, or an offset? Light only adds; these values "
+                    "are read as dark",
+                    negative, brightness.size(), d.filenames[first_negative].c_str());
+      text += (text.empty() ? "" : "; ") + std::string(line);
+    }
   }
   // Images identical inside the mask: the first of each group and how many repeat it.
   std::size_t repeats = 0, groups = 0, first_a = 0, first_b = 0;

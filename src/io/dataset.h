@@ -32,6 +32,8 @@ struct ImageCounts {
   int orientation = 1;  // the EXIF orientation the file states (io/image_io.h)
   // FNV-1a of the stored values inside the mask, row by row: equal for images identical there.
   std::uint64_t masked_hash = 14695981039346656037ull;
+  // Σ of the linear values' channel mean inside the mask: the image's mean brightness × pixels.
+  double linear_sum = 0;
 };
 
 struct Dataset {
@@ -75,9 +77,13 @@ struct DatasetLoadOptions {
 std::string DescribeDataset(const Dataset& dataset);
 
 // "" or one line on the images with clipped pixels (over 1% of the mask) or black ones (over 10%:
-// cast shadows alone make a few percent), and on images identical inside the mask (one photo
-// under two names, or all of them: `normals` then refuses in its plan).
+// cast shadows alone make a few percent), on images far brighter than the rest for their lights'
+// intensities or negative on average, and on images identical inside the mask (one photo under
+// two names, or all of them: `normals` then refuses in its plan).
 std::string DescribeImageCounts(const Dataset& dataset);
+// An image this many times as bright as the median one (each over its light's intensity) is
+// named by DescribeImageCounts: no light's shading does that.
+constexpr double kBrightImageRatio = 100;
 
 // Reads a dataset directory. Throws std::runtime_error whose one-line message names the file
 // (and the line for text files): missing or short light files, NaN, zero intensities, image

@@ -11,6 +11,7 @@ import os
 import resource
 import shutil
 import struct
+import subprocess
 import zlib
 
 import pytest
@@ -463,6 +464,23 @@ def test_one_photo_under_two_names_is_named_and_one_photo_under_every_name_refus
         assert err.splitlines()[-1].startswith(
             f"iphong: error: {ds}: the 12 images are the same at each of the "), flags
         assert not (tmp_path / "same").exists()
+
+
+def test_an_image_in_other_units_is_named(rendered, tmp_path):
+    """One photo stored 0-255 among 0-1 photos (read as linear floats): no light's shading makes an
+    image 255 times as bright as the median one, so it is named; the capture as rendered is not."""
+    ds = user_copy(rendered, tmp_path / "ds")
+    subprocess.run(["oiiotool", str(ds / "005.png"), "--mulc", "255", "-d", "float", "-o",
+                    str(ds / "005.exr")], check=True)
+    (ds / "005.png").unlink()
+    names = (ds / "filenames.txt").read_text().replace("005.png", "005.exr")
+    (ds / "filenames.txt").write_text(names)
+    code, _, err = run("normals", ds, "-o", tmp_path / "out")
+    assert code == 0, err
+    assert ("1 of 12 images are more than 100 times as bright as the median image, after their "
+            "lights' intensities (most: 005.exr, ") in err, err
+    code, _, err = run("normals", rendered, "-o", tmp_path / "plain")
+    assert code == 0 and "as bright as the median" not in err, err
 
 
 def test_text_files_from_windows_editors_are_read(rendered, tmp_path):

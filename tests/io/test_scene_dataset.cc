@@ -253,6 +253,33 @@ TEST(ImageCounts, IdenticalImagesAreNamedAndBlankOnesAreNot) {
             "photographs, or one photo was saved under every name");
 }
 
+// An image a hundred times as bright as the median one for its light's intensity (another
+// exposure, other units) is named, as is one negative on average; the intensities are taken in.
+TEST(ImageCounts, ImagesBrightBeyondAnyShadingOrNegativeAreNamed) {
+  Dataset d;
+  d.filenames = {"a.exr", "b.exr", "c.exr", "d.exr"};
+  d.image_counts.assign(4, {});
+  d.light_intensities.assign(4, Vec3d::Ones());
+  for (std::size_t j = 0; j < 4; ++j) {
+    d.image_counts[j].pixels = 100;
+    d.image_counts[j].masked_hash = j;
+    d.image_counts[j].linear_sum = 40 + j;  // means 0.40 ... 0.43
+  }
+  EXPECT_EQ(DescribeImageCounts(d), "");
+  d.image_counts[2].linear_sum = 40 * 255;  // stored in 0-255
+  EXPECT_EQ(DescribeImageCounts(d),
+            "1 of 4 images are more than 100 times as bright as the median image, after their "
+            "lights' intensities (most: c.exr, 237 times): a photo at another exposure, or "
+            "stored in other units (0-255 among 0-1)? Give its intensity (--intensities) or "
+            "convert it");
+  d.light_intensities[2] = Vec3d::Constant(255);  // its light said so: nothing to say
+  EXPECT_EQ(DescribeImageCounts(d), "");
+  d.image_counts[1].linear_sum = -5;
+  EXPECT_EQ(DescribeImageCounts(d),
+            "1 of 4 images are negative on average inside the mask (first: b.exr): a black level "
+            "subtracted twice, or an offset? Light only adds; these values are read as dark");
+}
+
 // A grey light's intensity is one number: the same in R, G and B. Two numbers are an error.
 TEST_F(BadDataset, OneIntensityPerLineIsAGreyLight) {
   Write("d/light_intensities.txt", "2\n0.5 0.25 1\n");
