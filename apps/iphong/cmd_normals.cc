@@ -180,6 +180,9 @@ void RunNormals(const NormalsCommandOptions& o) {
   io::ObservationSet loaded = LoadCaptureObservations(o.dataset, o.capture, o.common);
   io::Dataset& dataset = loaded.dataset;
   ReportCapture(o.dataset, dataset, o.common);
+  if (std::string black = io::AllMaskedBlack(dataset); !black.empty()) {
+    throw std::runtime_error(o.dataset + ": " + black);
+  }
   solve::NormalOptions options = NormalOptionsFor(o, dataset);
   auto fit_progress = std::make_shared<Progress>("fit", o.common.progress_mode());
   options.progress = [fit_progress](double fraction) { fit_progress->Update(fraction); };

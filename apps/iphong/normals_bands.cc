@@ -208,6 +208,10 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(o.dataset + ": " + e.what());
   }
+  // The counts are known once a pass has read every band; nothing is committed yet.
+  if (std::string black = io::AllMaskedBlack(dataset); !black.empty()) {
+    throw std::runtime_error(o.dataset + ": " + black);
+  }
   fit.reset();
   progress.reset();
   std::optional<integrate::FrameCheckResult> frame;

@@ -321,6 +321,17 @@ std::string DescribeDataset(const Dataset& d) {
   return text;
 }
 
+std::string AllMaskedBlack(const Dataset& d) {
+  if (d.image_counts.empty()) return "";
+  for (const ImageCounts& c : d.image_counts) {
+    if (c.pixels == 0 || c.black != c.pixels) return "";
+  }
+  return "every pixel inside the mask is black (0) in every image: no normal can be recovered" +
+         std::string(d.files.mask_path.empty()
+                         ? " (no image was exposed, or the files hold no picture)"
+                         : " (a mask marking the background? Nonzero marks the object)");
+}
+
 std::string DescribeImageCounts(const Dataset& d) {
   std::size_t worst_saturated = 0, worst_black = 0, clipped_images = 0, black_images = 0;
   double saturated_fraction = 0, black_fraction = 0;

@@ -81,6 +81,10 @@ std::string DescribeDataset(const Dataset& dataset);
 // intensities or negative on average, and on images identical inside the mask (one photo under
 // two names, or all of them: `normals` then refuses in its plan).
 std::string DescribeImageCounts(const Dataset& dataset);
+// "" or, when every image is black (0) at every pixel inside the mask (and there is one), why
+// nothing can be recovered: `normals` refuses such a capture (a mask marking the background).
+std::string AllMaskedBlack(const Dataset& dataset);
+
 // An image this many times as bright as the median one (each over its light's intensity) is
 // named by DescribeImageCounts: no light's shading does that.
 constexpr double kBrightImageRatio = 100;

@@ -483,6 +483,20 @@ def test_an_image_in_other_units_is_named(rendered, tmp_path):
     assert code == 0 and "as bright as the median" not in err, err
 
 
+def test_a_mask_marking_the_background_is_refused(rendered, tmp_path):
+    """A mask drawn the wrong way round selects only the black background: every pixel dark in
+    every image went through with exit 0 and empty maps. Refused, in memory and in bands."""
+    ds = user_copy(rendered, tmp_path / "ds")
+    subprocess.run(["oiiotool", str(ds / "mask.png"), "--invert", "-o", str(ds / "mask.png")],
+                   check=True)
+    (ds / "Normal_gt.mat").unlink(missing_ok=True)
+    for flags in ([], ["--band-rows", "16"]):
+        assert_refused(tmp_path, ["normals", ds, "-o", tmp_path / "out", *flags], 1,
+                       r"every pixel inside the mask is black \(0\) in every image: no normal "
+                       r"can be recovered \(a mask marking the background\? Nonzero marks the "
+                       r"object\)", "ds", ignore_warnings=True)
+
+
 def test_text_files_from_windows_editors_are_read(rendered, tmp_path):
     """A UTF-8 byte-order mark and CRLF line ends are what Notepad writes: not an error."""
     ds = user_copy(rendered, tmp_path / "ds")
