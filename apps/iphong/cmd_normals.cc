@@ -348,8 +348,15 @@ void RunNormals(const NormalsCommandOptions& o) {
   if (!result.specular_note.empty()) metrics["specular_note"] = result.specular_note;
   std::optional<solve::AngularErrorMetrics> errors;
   if (!dataset.normal_gt.pixels.empty()) {
-    errors = solve::CompareNormals(result.normals, dataset.normal_gt, dataset.mask);
-    metrics.update(MetricsJson(*errors));
+    try {
+      errors = solve::CompareNormals(result.normals, dataset.normal_gt, dataset.mask);
+      metrics.update(MetricsJson(*errors));
+    } catch (const std::invalid_argument& e) {
+      // The normals stand without it: a ground truth that is zero wherever they were solved
+      // (another object's, or every pixel flagged) is named, not a reason to discard them.
+      Warn(dataset.files.ground_truth_path + ": not compared: " + e.what());
+      metrics["ground_truth_note"] = std::string("not compared: ") + e.what();
+    }
   }
 
   io::WriteImage(out.file("normals.exr"), result.normals);

@@ -497,6 +497,23 @@ def test_a_mask_marking_the_background_is_refused(rendered, tmp_path):
                        r"object\)", "ds", ignore_warnings=True)
 
 
+def test_a_ground_truth_beside_every_solved_pixel_is_named_not_fatal(rendered, tmp_path):
+    """A ground truth that holds normals only where nothing was solved (here one corner pixel,
+    outside the mask): the normals stand, the file is named, nothing compared. It failed with a
+    line naming no file and discarded the run."""
+    ds = user_copy(rendered, tmp_path / "ds")
+    (ds / "Normal_gt.mat").unlink()
+    (ds / "normal.txt").write_text("0 0 1\n" + "0 0 0\n" * (96 * 96 - 1))
+    code, out, err = run("normals", ds, "-o", tmp_path / "out")
+    assert code == 0, err
+    assert err.splitlines() == [
+        f"iphong: warning: {ds}/normal.txt: not compared: no pixel has both an estimate and ground "
+        "truth"], err
+    metrics = json.loads((tmp_path / "out" / "metrics.json").read_text())
+    assert "mean_angular_error_deg" not in metrics and metrics["ground_truth_note"].startswith("not compared")
+    assert not (tmp_path / "out" / "error.png").exists()
+
+
 def test_text_files_from_windows_editors_are_read(rendered, tmp_path):
     """A UTF-8 byte-order mark and CRLF line ends are what Notepad writes: not an error."""
     ds = user_copy(rendered, tmp_path / "ds")
