@@ -78,7 +78,8 @@ std::string DescribeDataset(const Dataset& dataset);
 
 // "" or one line on the images with clipped pixels (over 1% of the mask) or black ones (over 10%:
 // cast shadows alone make a few percent), on images far brighter than the rest for their lights'
-// intensities or negative on average, and on images identical inside the mask (one photo under
+// intensities or negative on average, on an intensity file the images' brightness contradicts
+// (distant lights), and on images identical inside the mask (one photo under
 // two names, or all of them: `normals` then refuses in its plan).
 std::string DescribeImageCounts(const Dataset& dataset);
 // "" or, when every image is black (0) at every pixel inside the mask (and there is one), why
@@ -88,6 +89,10 @@ std::string AllMaskedBlack(const Dataset& dataset);
 // An image this many times as bright as the median one (each over its light's intensity) is
 // named by DescribeImageCounts: no light's shading does that.
 constexpr double kBrightImageRatio = 100;
+// DescribeImageCounts names an intensity file only when the images' fit with it misses by more
+// than this share of their mean brightness (and by more than without it): a file of nearly equal
+// intensities changes both fits alike, and noise in a few images is not a wrong file.
+constexpr double kIntensityMisfitFloor = 0.1;
 
 // Reads a dataset directory. Throws std::runtime_error whose one-line message names the file
 // (and the line for text files): missing or short light files, NaN, zero intensities, image
