@@ -384,11 +384,13 @@ std::string DescribeImageCounts(const Dataset& d) {
   // times the albedo: on every shared capture (DiLiGenT, UW with its chrome sphere, the rendered
   // bunny) the brightest image is within 1.41 times the median's. A hundred times is no shading:
   // a photo at another exposure, or stored in other units (0–255 among 0–1).
-  std::vector<double> brightness;
+  // Each image's mean inside the mask, and the same over its light's intensity.
+  std::vector<double> mean, brightness;
   for (std::size_t j = 0; j < d.image_counts.size(); ++j) {
     const ImageCounts& c = d.image_counts[j];
     const double e = j < d.light_intensities.size() ? d.light_intensities[j].mean() : 1.0;
-    brightness.push_back(c.pixels > 0 && e > 0 ? c.linear_sum / c.pixels / e : 0.0);
+    mean.push_back(c.pixels > 0 ? c.linear_sum / c.pixels : 0.0);
+    brightness.push_back(e > 0 ? mean.back() / e : 0.0);
   }
   if (!brightness.empty()) {
     std::vector<double> sorted = brightness;
@@ -431,15 +433,12 @@ std::string DescribeImageCounts(const Dataset& d) {
       d.light_intensities.size() == d.image_counts.size()) {
     const int k = static_cast<int>(d.image_counts.size());
     Eigen::MatrixX3d l(k, 3);
-    Eigen::VectorXd with_file(k), without(k);
+    const Eigen::VectorXd with_file = Eigen::Map<const Eigen::VectorXd>(brightness.data(), k);
+    const Eigen::VectorXd without = Eigen::Map<const Eigen::VectorXd>(mean.data(), k);
     bool usable = true;
     for (int j = 0; j < k; ++j) {
-      const ImageCounts& c = d.image_counts[j];
-      const double e = d.light_intensities[j].mean();
-      usable = usable && c.pixels > 0 && e > 0;
+      usable = usable && d.image_counts[j].pixels > 0;
       l.row(j) = d.light_directions[j].transpose();
-      without[j] = c.pixels > 0 ? c.linear_sum / c.pixels : 0.0;
-      with_file[j] = e > 0 ? without[j] / e : 0.0;
     }
     const auto misfit = [&](const Eigen::VectorXd& y) {
       const Eigen::Vector3d b = l.colPivHouseholderQr().solve(y);
