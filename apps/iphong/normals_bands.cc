@@ -28,6 +28,11 @@ constexpr double kProcessBytes = 200e6;
 // Per working pixel of a band beyond its observations: the fitted results (11 floats), the
 // per-pixel solutions of the fit and the pictures' rows.
 constexpr double kResultBytesPerPixel = 11 * 4 + 160 + 4 * 6;
+// Bands never hold the whole ground truth, so they do not compare against it; the Read line and
+// metrics.json say so in these words.
+constexpr const char* kBandsGroundTruthNote =
+    "not compared in bands, which never hold the whole ground truth: iphong eval normals.exr "
+    "DATASET compares it";
 
 // The rows of a band: the masked pixels of rows [y0, y1) of the working mask.
 Mask BandMask(const Mask& mask, int y0, int y1) {
@@ -89,7 +94,8 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
         "--integrate needs the whole normal map: leave it out and run `iphong integrate` on "
         "normals.exr");
   }
-  Say(o.common, "Read %s: %s\n", o.dataset.c_str(), io::DescribeDataset(dataset).c_str());
+  Say(o.common, "Read %s: %s\n", o.dataset.c_str(),
+      io::DescribeDataset(dataset, kBandsGroundTruthNote).c_str());
   for (const std::string& warning : dataset.warnings) Warn(warning);
   Say(o.common,
       "In bands of %d rows: the whole capture would need %s (memory limit %s); each band needs "
@@ -282,8 +288,7 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
   metrics["material"] = MaterialLabel(options, result);
   if (!result.specular_note.empty()) metrics["specular_note"] = result.specular_note;
   if (!dataset.files.ground_truth_path.empty()) {
-    metrics["ground_truth_note"] =
-        "not compared in bands: the ground truth is read whole (iphong eval normals.exr DATASET)";
+    metrics["ground_truth_note"] = kBandsGroundTruthNote;
   }
   if (result.material_estimated) {
     io::WriteTextFile(out.file("material.json"), EstimatedMaterialJson(result).dump(2) + "\n");

@@ -81,6 +81,16 @@ fs::path FindLightFile(const fs::path& dir, const std::vector<std::string>& file
   for (const char* name : {"light_directions.txt", "lights.txt", "lights.json"})
     if (Exists(dir / name)) return dir / name;
   if (std::string lp = OnlyWithExtension(files, ".lp", dir); !lp.empty()) return dir / lp;
+  // A .lp that is not a regular file (a pipe, say) is still the light file the user meant: the
+  // reader then names it and says what it is, instead of "found no .lp file" naming the folder.
+  {
+    std::error_code error;
+    for (fs::directory_iterator it(dir, error), end; !error && it != end; it.increment(error)) {
+      const std::string name = it->path().filename().string();
+      if (!name.empty() && name[0] != '.' && Lower(it->path().extension().string()) == ".lp")
+        return dir / name;
+    }
+  }
   // RTIBuilder keeps its .lp in a subfolder (assembly-files/) beside the images.
   // A subfolder that cannot be read (or is not the user's business) is passed over, not an error.
   std::vector<fs::path> nested;

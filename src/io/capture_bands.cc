@@ -41,6 +41,7 @@ void CaptureBands::OpenReaders() {
     auto reader = std::make_unique<ImageRowReader>(path, d.orientation);
     const ImageHeader& h = reader->header();
     s.p.d.image_counts[j].orientation = h.orientation;
+    s.p.d.image_counts[j].integer_codes = !h.is_float;
     if (h.width != d.file_width || h.height != d.file_height) {
       throw std::runtime_error(path + ": is " + SizeText(h.width, h.height) + ", but " + reference +
                                " is " + SizeText(d.file_width, d.file_height));

@@ -40,7 +40,7 @@ ImageF ReadDatasetImage(const std::string& path, int width, int height, int orie
   return ToRgb(ReadImage(
       path, memory,
       [&](const ImageHeader& h) {
-        if (counts) counts->orientation = h.orientation;
+        if (counts) counts->orientation = h.orientation, counts->integer_codes = !h.is_float;
         if (h.width != width || h.height != height) {
           Fail(path, "is " + SizeText(h.width, h.height) + ", but " + reference + " is " +
                          SizeText(width, height));
@@ -114,7 +114,6 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
     d.file_height = stored.header.height;
     d.orientation = stored.header.orientation;
     d.encoding = ChooseEncoding(d.files, options.capture, stored);
-    p.integer_files = !stored.is_float;
   } else {
     d.encoding = ChooseEncoding(d.files, options.capture, StoredEncoding{});
   }
@@ -246,7 +245,7 @@ ImageF WorkingRows(const Prepared& p, ImageF rows, int skip, int count, int file
       if (!p.file_mask.inside[first + q]) continue;
       const float* v = rows.pixels.data() + 3 * q;
       if (v[0] == 0 && v[1] == 0 && v[2] == 0) ++counts->black;
-      if (p.integer_files && (v[0] >= 1 || v[1] >= 1 || v[2] >= 1)) ++counts->saturated;
+      if (counts->integer_codes && (v[0] >= 1 || v[1] >= 1 || v[2] >= 1)) ++counts->saturated;
       unsigned char bytes[3 * sizeof(float)];
       std::memcpy(bytes, v, sizeof bytes);
       for (unsigned char byte : bytes)
@@ -287,7 +286,7 @@ ImageF ReadWorkingImage(const Prepared& p, std::size_t j, const std::string& ref
 
 }  // namespace
 
-std::string DescribeDataset(const Dataset& d) {
+std::string DescribeDataset(const Dataset& d, const std::string& ground_truth_note) {
   const CaptureFiles& f = d.files;
   const std::size_t k = f.names.size();
   auto base = [](const std::string& path) { return fs::path(path).filename().string(); };
@@ -314,6 +313,8 @@ std::string DescribeDataset(const Dataset& d) {
   }
   text += "; ground truth " +
           (f.ground_truth_path.empty() ? std::string("none") : base(f.ground_truth_path));
+  if (!f.ground_truth_path.empty() && !ground_truth_note.empty())
+    text += " (" + ground_truth_note + ")";
   if (!f.skipped.empty()) {
     text += "; not read: ";
     for (std::size_t i = 0; i < f.skipped.size() && i < 4; ++i)

@@ -34,6 +34,7 @@ struct ImageCounts {
   std::uint64_t masked_hash = 14695981039346656037ull;
   // Σ of the linear values' channel mean inside the mask: the image's mean brightness × pixels.
   double linear_sum = 0;
+  bool integer_codes = true;  // the file's own sample type: only integer codes clip at 1
 };
 
 struct Dataset {
@@ -73,8 +74,9 @@ struct DatasetLoadOptions {
 };
 
 // One line saying what was read: how many images, from which list or in which order, the light
-// file, the intensities, the mask, the encoding and why, the size after --crop/--downscale.
-std::string DescribeDataset(const Dataset& dataset);
+// file, the intensities, the mask, the encoding and why, the size after --crop/--downscale, the
+// ground truth (followed by `ground_truth_note` in brackets when one is given and there is one).
+std::string DescribeDataset(const Dataset& dataset, const std::string& ground_truth_note = "");
 
 // "" or one line on the images with clipped pixels (over 1% of the mask) or black ones (over 10%:
 // cast shadows alone make a few percent), on images far brighter than the rest for their lights'

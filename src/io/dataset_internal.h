@@ -15,7 +15,6 @@ struct Prepared {
   PixelRect crop;  // width 0 = none
   Mask file_mask;  // the mask at the files' resolution, cropped: where pixels are counted
   bool srgb = false;
-  bool integer_files = true;       // saturation exists only for integer code values
   std::size_t counted_pixels = 0;  // file_mask.count(): every image's counts are out of it
 };
 

@@ -60,7 +60,7 @@ std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHead
   }
   int orientation = spec.get_int_attribute("Orientation", 1);
   if (orientation < 1 || orientation > 8) orientation = 1;  // what viewers do with a bad tag
-  *header = {spec.width, spec.height, spec.nchannels, orientation};
+  *header = {spec.width, spec.height, spec.nchannels, orientation, spec.format.is_floating_point()};
   if (OrientationSwapsAxes(orientation)) std::swap(header->width, header->height);
   return in;
 }

@@ -45,6 +45,7 @@ std::string DescribeOrientation(int orientation);
 struct ImageHeader {
   int width = 0, height = 0, channels = 0;  // as displayed (after the orientation)
   int orientation = 1;                      // as the file states it (1 when it states none)
+  bool is_float = false;                    // half or float samples: no code value clips at 1
 };
 
 // The size a file declares, read from its header only. Refuses what is not a regular file, a

@@ -167,6 +167,14 @@ def lp_names_a_missing_image(ds):
     return 1, r"names C:\\shots\\IMG_9\.png, which is in neither", "ds/capture.lp"
 
 
+def fifo_lp_file(ds):
+    """A pipe named capture.lp was passed over as not a file, and the error named the folder."""
+    as_rti(ds, ["1", "001.png 0 0 1"])
+    (ds / "capture.lp").unlink()
+    os.mkfifo(ds / "capture.lp")  # reading it would block forever
+    return 1, r"not a regular file", "ds/capture.lp"
+
+
 def two_lp_files(ds):
     as_rti(ds, ["1", "001.png 0 0 1"])
     (ds / "other.lp").write_text("1\n001.png 0 0 1\n")
@@ -242,7 +250,7 @@ DATASET_CASES = [
     garbage_light_file,
     coplanar_lights, black_mask,
     fifo_light_file, folder_as_light_file, empty_filenames, missing_filenames, missing_image,
-    zero_count_lp, lp_names_a_missing_image, two_lp_files,
+    zero_count_lp, lp_names_a_missing_image, fifo_lp_file, two_lp_files,
     corrupt_png, forged_png_header, image_of_another_size, small_mask, truncated_ground_truth,
     zero_ground_truth, bad_material, overflowing_material, encoding_not_a_string,
     one_image_unknown_albedo,
@@ -481,6 +489,29 @@ def test_an_image_in_other_units_is_named(rendered, tmp_path):
             "lights' intensities (most: 005.exr, ") in err, err
     code, _, err = run("normals", rendered, "-o", tmp_path / "plain")
     assert code == 0 and "as bright as the median" not in err, err
+
+
+def test_float_values_above_one_in_a_mixed_capture_are_not_clipped(rendered, tmp_path):
+    """A capture of PNGs with one EXR whose values pass 1: a float file does not clip there. The
+    clipped count took the first file's sample type for every file and named the EXR clipped."""
+    ds = user_copy(rendered, tmp_path / "ds")
+
+    def to_exr(name):
+        subprocess.run(["oiiotool", str(ds / name), "--mulc", "4", "-d", "float", "-o",
+                        str(ds / name.replace(".png", ".exr"))], check=True)
+        (ds / name).unlink()
+        names = (ds / "filenames.txt").read_text().replace(name, name.replace(".png", ".exr"))
+        (ds / "filenames.txt").write_text(names)
+
+    to_exr("005.png")
+    code, _, err = run("normals", ds, "-o", tmp_path / "out")
+    assert code == 0, err
+    assert "clipped" not in err, err
+    # An EXR first: the PNGs are still integer codes, and none of them clips either.
+    to_exr("001.png")
+    code, _, err = run("normals", ds, "-o", tmp_path / "out2")
+    assert code == 0, err
+    assert "clipped" not in err, err
 
 
 def test_a_mask_marking_the_background_is_refused(rendered, tmp_path):

@@ -64,6 +64,16 @@ def test_bands_equal_the_whole(captures, tmp_path, layout, rows, flags):
         assert a["ks"] == b["ks"] and a["shininess"] == b["shininess"]
 
 
+def test_bands_say_the_ground_truth_is_not_compared(captures, tmp_path):
+    """Bands never hold the whole ground truth: the Read line named it as if it were used."""
+    code, out, err = run("normals", captures / "png", "-o", tmp_path / "bands", "--band-rows", "16")
+    assert code == 0, err
+    read = [line for line in out.splitlines() if line.startswith("Read ")]
+    assert len(read) == 1 and "; ground truth Normal_gt." in read[0], out
+    note = json.loads((tmp_path / "bands" / "metrics.json").read_text())["ground_truth_note"]
+    assert f" ({note})" in read[0] and note.startswith("not compared in bands"), (read, note)
+
+
 def test_memory_limit_chooses_bands(captures, tmp_path):
     """A limit between one row's need and the whole capture's: bands, within the limit."""
     code, out, err = run("normals", captures / "png", "-o", tmp_path / "one", "--json",
