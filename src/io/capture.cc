@@ -81,30 +81,28 @@ fs::path FindLightFile(const fs::path& dir, const std::vector<std::string>& file
   for (const char* name : {"light_directions.txt", "lights.txt", "lights.json"})
     if (Exists(dir / name)) return dir / name;
   if (std::string lp = OnlyWithExtension(files, ".lp", dir); !lp.empty()) return dir / lp;
-  // A .lp that is not a regular file (a pipe, say) is still the light file the user meant: the
-  // reader then names it and says what it is, instead of "found no .lp file" naming the folder.
-  {
-    std::error_code error;
-    for (fs::directory_iterator it(dir, error), end; !error && it != end; it.increment(error)) {
-      const std::string name = it->path().filename().string();
-      if (!name.empty() && name[0] != '.' && Lower(it->path().extension().string()) == ".lp")
-        return dir / name;
-    }
-  }
   // RTIBuilder keeps its .lp in a subfolder (assembly-files/) beside the images.
   // A subfolder that cannot be read (or is not the user's business) is passed over, not an error.
+  // A .lp here that is not a regular file (a pipe, say) is still the light file the user meant:
+  // the reader then names it and says what it is, instead of "found no .lp file" on the folder.
   std::vector<fs::path> nested;
+  fs::path own;
   std::error_code list_error;
   for (fs::directory_iterator it(dir, list_error), end; !list_error && it != end;
        it.increment(list_error)) {
+    if (it->path().filename().string()[0] == '.') continue;
     std::error_code status_error;
-    if (!it->is_directory(status_error) || it->path().filename().string()[0] == '.') continue;
+    if (!it->is_directory(status_error)) {
+      if (Lower(it->path().extension().string()) == ".lp") own = it->path();
+      continue;
+    }
     std::error_code sub_error;
     for (fs::directory_iterator f(it->path(), sub_error), last; !sub_error && f != last;
          f.increment(sub_error)) {
       if (Lower(f->path().extension().string()) == ".lp") nested.push_back(f->path());
     }
   }
+  if (!own.empty()) return dir / own.filename();
   if (nested.size() > 1) {
     Fail(dir, "its subfolders hold several .lp files (" + nested[0].string() + ", " +
                   nested[1].string() + "); name the light file with --lights");
@@ -466,7 +464,7 @@ EncodingChoice ChooseEncoding(const CaptureFiles& files, const CaptureOptions& o
     return {encoding == "srgb" ? Encoding::kSrgb : Encoding::kLinear, "render.json says so"};
   }
   const std::string what = std::to_string(first.bits) + "-bit " + first.format;
-  if (first.is_float) return {Encoding::kLinear, what + " (float)"};
+  if (first.header.is_float) return {Encoding::kLinear, what + " (float)"};
   if (first.stated) return {first.encoding, what + " states it (" + first.statement + ")"};
   // 16-bit files are raw camera data far more often than pictures made for a screen.
   return {Encoding::kLinear,

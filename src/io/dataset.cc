@@ -40,7 +40,10 @@ ImageF ReadDatasetImage(const std::string& path, int width, int height, int orie
   return ToRgb(ReadImage(
       path, memory,
       [&](const ImageHeader& h) {
-        if (counts) counts->orientation = h.orientation, counts->integer_codes = !h.is_float;
+        if (counts) {
+          counts->orientation = h.orientation;
+          counts->integer_codes = !h.is_float;
+        }
         if (h.width != width || h.height != height) {
           Fail(path, "is " + SizeText(h.width, h.height) + ", but " + reference + " is " +
                          SizeText(width, height));

@@ -276,10 +276,9 @@ StoredEncoding ReadStoredEncoding(const std::string& path) {
   auto in = OpenChecked(path, &e.header);
   const OIIO::ImageSpec& spec = in->spec();
   e.format = in->format_name();
-  e.is_float = spec.format.is_floating_point();
   e.bits = spec.get_int_attribute("oiio:BitsPerSample", static_cast<int>(spec.format.size()) * 8);
   in->close();
-  if (e.is_float) return e;
+  if (e.header.is_float) return e;
   if (e.format == "jpeg") {
     e.stated = true;
     e.encoding = Encoding::kSrgb;

@@ -69,11 +69,10 @@ ImageF ReadImage(const std::string& path, const MemoryLimit& memory = {},
 // chunk, any file with an Exif ColorSpace tag of sRGB. OpenImageIO reports "sRGB" for every PNG,
 // chunk or not, so PNG chunks are read here from the file itself.
 struct StoredEncoding {
-  ImageHeader header;     // the size the file declares (ReadImageHeader's checks)
-  int bits = 8;           // per channel as stored
-  bool is_float = false;  // half or float samples
-  std::string format;     // OpenImageIO's name: "png", "jpeg", "targa", "openexr", ...
-  bool stated = false;    // the file states its encoding ...
+  ImageHeader header;   // size and sample type as declared (ReadImageHeader's checks)
+  int bits = 8;         // per channel as stored
+  std::string format;   // OpenImageIO's name: "png", "jpeg", "targa", "openexr", ...
+  bool stated = false;  // the file states its encoding ...
   Encoding encoding = Encoding::kLinear;  // ... as this
   std::string statement;  // how: "sRGB chunk", "gAMA 0.45455", "JPEG", "Exif ColorSpace sRGB"
 };

@@ -236,7 +236,7 @@ TEST_F(Capture, EncodingIsWhatTheFileStatesElseLinear) {
   EXPECT_EQ(ReadStoredEncoding((dir_ / "photo.jpg").string()).statement, "JPEG");
 
   WriteImage((dir_ / "f.exr").string(), ImageF(4, 3, 3, 0.5f));
-  EXPECT_TRUE(ReadStoredEncoding((dir_ / "f.exr").string()).is_float);
+  EXPECT_TRUE(ReadStoredEncoding((dir_ / "f.exr").string()).header.is_float);
 
   CaptureFiles files;
   CaptureOptions forced;

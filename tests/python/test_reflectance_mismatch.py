@@ -8,9 +8,8 @@ import pytest
 
 import iphong
 from brdf_zoo import burley_diffuse, ggx, oren_nayar, render, sphere
-from test_normals_surfaces import lights
-
-SIZE = 96
+from test_normals_surfaces import SIZE, lights
+from test_normals_surfaces import scene as surface_scene
 
 
 def test_the_zoo_reduces_to_lambert_where_its_papers_say():
@@ -45,10 +44,7 @@ def error(result, normals, mask):
 
 def scene(reflectance, count=24, **kwargs):
     n, mask = sphere(SIZE)
-    c = (np.arange(SIZE) + 0.5) / SIZE
-    cx, cy = np.meshgrid(c, c)
-    albedo = np.stack([0.5 + 0.3 * np.sin(6 * cx), 0.4 + 0.25 * np.cos(5 * cy),
-                       0.3 + 0.2 * np.sin(4 * (cx + cy))], -1)
+    albedo = surface_scene("peaks")[2]  # the surfaces' varying albedo, on the sphere
     directions = lights(count)[0]
     images = render(n, mask, albedo, directions, reflectance, sigma=0.002, **kwargs)
     return images, directions, mask, (n * mask[..., None]).astype(np.float32)
