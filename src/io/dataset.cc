@@ -154,7 +154,7 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
   }
 
   if (!d.files.mask_path.empty()) {
-    const Mask file_mask = ReadMask(d.files.mask_path, options.memory);
+    const Mask file_mask = ReadMask(d.files.mask_path, options.memory, &d.mask_reading);
     if (have_first && (file_mask.width != d.file_width || file_mask.height != d.file_height)) {
       Fail(d.files.mask_path, "is " + SizeText(file_mask.width, file_mask.height) +
                                   ", the images are " + SizeText(d.file_width, d.file_height) +
@@ -301,6 +301,7 @@ std::string DescribeDataset(const Dataset& d, const std::string& ground_truth_no
   }
   text +=
       "; mask " + (f.mask_path.empty() ? std::string("none (the whole image)") : base(f.mask_path));
+  if (!d.mask_reading.empty()) text += " (" + d.mask_reading + ")";
   text += "; encoding " + std::string(d.encoding.encoding == Encoding::kSrgb ? "srgb" : "linear") +
           " (" + d.encoding.reason + ")";
   if (d.mask.width > 0 && (d.mask.width != d.file_width || d.mask.height != d.file_height)) {

@@ -52,7 +52,8 @@ struct Dataset {
   std::vector<Vec3d> light_directions;   // unit
   std::vector<Vec3d> light_intensities;  // RGB
   Mask mask;
-  ImageF normal_gt;  // 3 channels; empty when the dataset has none
+  std::string mask_reading;  // how the mask file was read when not as nonzero colour (ReadMask)
+  ImageF normal_gt;          // 3 channels; empty when the dataset has none
   // Near-light captures: Depth_gt.mat (mm along the optical axis, 0 outside; 1 channel), empty
   // when absent (or under --downscale, which would average depths across edges).
   ImageF depth_gt;

@@ -18,7 +18,9 @@ namespace {
   throw std::runtime_error(source + (line > 0 ? ":" + std::to_string(line) : "") + ": " + message);
 }
 
-// Non-blank lines with their numbers; "\r\n" endings accepted.
+// Non-blank lines with their numbers; "\r\n" endings accepted. A line whose first non-blank
+// character is '#' is a comment (numpy.savetxt writes its header so, and MATLAB and spreadsheet
+// exports are often annotated the same way).
 std::vector<std::pair<int, std::string>> Lines(const std::string& text) {
   std::vector<std::pair<int, std::string>> lines;
   // Editors on Windows start UTF-8 files with a byte-order mark; it is not part of line 1.
@@ -28,7 +30,8 @@ std::vector<std::pair<int, std::string>> Lines(const std::string& text) {
     if (end == std::string::npos) end = text.size();
     std::string line = text.substr(start, end - start);
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.find_first_not_of(" \t") != std::string::npos) lines.emplace_back(number, line);
+    const std::size_t first = line.find_first_not_of(" \t");
+    if (first != std::string::npos && line[first] != '#') lines.emplace_back(number, line);
     start = end + 1;
   }
   return lines;

@@ -1,8 +1,8 @@
 // The text files of a dataset, parsed from memory: filenames.txt, light_directions.txt,
 // light_intensities.txt, normal.txt and material.json. Kept apart from the file reading so the
 // fuzz target (tests/fuzz) drives exactly what LoadDataset runs. Every error is a
-// std::runtime_error "SOURCE[:LINE]: what is wrong (what is expected)". Lines may end in "\r\n"
-// and a file may start with a UTF-8 byte-order mark.
+// std::runtime_error "SOURCE[:LINE]: what is wrong (what is expected)". Lines may end in "\r\n",
+// a file may start with a UTF-8 byte-order mark, and a line starting with '#' is a comment.
 #pragma once
 
 #include <cstddef>

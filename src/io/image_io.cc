@@ -60,7 +60,15 @@ std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHead
   }
   int orientation = spec.get_int_attribute("Orientation", 1);
   if (orientation < 1 || orientation > 8) orientation = 1;  // what viewers do with a bad tag
-  *header = {spec.width, spec.height, spec.nchannels, orientation, spec.format.is_floating_point()};
+  const std::string format = in->format_name();
+  *header = {
+      spec.width,
+      spec.height,
+      spec.nchannels,
+      orientation,
+      spec.format.is_floating_point(),
+      spec.alpha_channel >= 0 && spec.alpha_channel < spec.nchannels ? spec.alpha_channel : -1,
+      format == "jpeg" || format == "webp" || format == "heif"};
   if (OrientationSwapsAxes(orientation)) std::swap(header->width, header->height);
   return in;
 }
@@ -294,12 +302,46 @@ StoredEncoding ReadStoredEncoding(const std::string& path) {
   return e;
 }
 
-Mask ReadMask(const std::string& path, const MemoryLimit& memory) {
-  const ImageF m = ReadImage(path, memory);
+Mask ReadMask(const std::string& path, const MemoryLimit& memory, std::string* how) {
+  ImageHeader header;
+  const ImageF m = ReadImage(path, memory, [&](const ImageHeader& h) { header = h; });
+  const std::size_t n = m.pixel_count();
+  const int alpha = header.alpha_channel;
+  std::vector<int> channels;
+  bool alpha_varies = false;
+  if (alpha >= 0) {
+    for (std::size_t p = 1; p < n && !alpha_varies; ++p) {
+      alpha_varies = m.pixels[p * m.channels + alpha] != m.pixels[alpha];
+    }
+  }
+  if (alpha_varies) {
+    channels = {alpha};
+  } else {
+    for (int c = 0; c < m.channels && channels.size() < 3; ++c) {
+      if (c != alpha) channels.push_back(c);
+    }
+  }
+  float threshold = 0;
+  if (header.lossy) {
+    float largest = 0;
+    for (std::size_t p = 0; p < n; ++p) {
+      for (const int c : channels) largest = std::max(largest, m.pixels[p * m.channels + c]);
+    }
+    threshold = 0.5f * largest;
+  }
   Mask mask(m.width, m.height, false);
-  for (std::size_t p = 0; p < m.pixel_count(); ++p) {
-    for (int c = 0; c < std::min(m.channels, 3); ++c) {
-      if (m.pixels[p * m.channels + c] > 0) mask.inside[p] = 1;
+  for (std::size_t p = 0; p < n; ++p) {
+    for (const int c : channels) {
+      if (m.pixels[p * m.channels + c] > threshold) mask.inside[p] = 1;
+    }
+  }
+  if (how) {
+    how->clear();
+    if (alpha_varies) *how = "its alpha channel: transparent = background";
+    if (header.lossy) {
+      *how += std::string(how->empty() ? "" : "; ") +
+              "above half its largest value: lossy compression leaves faint values around the "
+              "object";
     }
   }
   return mask;

@@ -46,6 +46,8 @@ struct ImageHeader {
   int width = 0, height = 0, channels = 0;  // as displayed (after the orientation)
   int orientation = 1;                      // as the file states it (1 when it states none)
   bool is_float = false;                    // half or float samples: no code value clips at 1
+  int alpha_channel = -1;                   // the channel the file names alpha, −1: none
+  bool lossy = false;                       // a lossy format (JPEG, WebP, HEIF): values are blurred
 };
 
 // The size a file declares, read from its header only. Refuses what is not a regular file, a
@@ -78,8 +80,13 @@ struct StoredEncoding {
 };
 StoredEncoding ReadStoredEncoding(const std::string& path);
 
-// A mask picture: a pixel is inside where any of its first three channels is non-zero.
-Mask ReadMask(const std::string& path, const MemoryLimit& memory = {});
+// A mask picture: a pixel is inside where any of its colour channels (the first three that are
+// not alpha) is non-zero. Two exceptions, each said in `how` ("" otherwise):
+// - an alpha channel that is not the same everywhere marks the object instead (a cut-out, whose
+//   transparent background may keep any colour): inside where alpha is non-zero;
+// - a lossy format (JPEG, WebP, HEIF) leaves faint non-zero values around the object, so a pixel
+//   is inside where it is above half the picture's largest value.
+Mask ReadMask(const std::string& path, const MemoryLimit& memory = {}, std::string* how = nullptr);
 
 // The sRGB transfer curve and its inverse, on [0, 1].
 float LinearToSrgb(float linear);

@@ -5,6 +5,7 @@ the test folders hold symbolic links to it, never copies."""
 import json
 import os
 import pathlib
+import subprocess
 
 import pytest
 
@@ -205,6 +206,37 @@ def test_mask_names_people_use(tmp_path):
     next(p for p in base.iterdir() if "mask" in p.name).unlink()
     stdout, metrics = normals(base, tmp_path / "none")
     assert "mask none (the whole image)" in stdout and metrics["pixels"] == 512 * 340
+
+
+def test_masks_as_photo_editors_save_them_and_commented_light_files(tmp_path):
+    """A cut-out (the photo, its background transparent), a mask saved as JPEG and light files
+    with '#' comments (numpy.savetxt's header) read as the DiLiGenT files do."""
+    names = (CROP_CAT / "filenames.txt").read_text().split()
+    reference = tmp_path / "reference"
+    _, expected = normals(CROP_CAT, reference, "--model", "lambert")
+    folder = tmp_path / "cat"
+    folder.mkdir()
+    for name in names:
+        link(CROP_CAT / name, folder / name)
+    (folder / "filenames.txt").write_text("# the photos, in light order\n" + "\n".join(names))
+    for text in ("light_directions", "light_intensities"):
+        lines = (CROP_CAT / f"{text}.txt").read_text()
+        (folder / f"{text}.txt").write_text("# x y z\n" + lines.replace("\n", "\n# next\n", 3))
+    subprocess.run(["oiiotool", CROP_CAT / names[0], "--ch", "R,G,B", CROP_CAT / "mask.png",
+                    "--ch", "0", "--chappend", "--chnames", "R,G,B,A", "-d", "uint8", "-o",
+                    folder / "mask.png"], check=True)
+    stdout, cutout = normals(folder, tmp_path / "cutout", "--model", "lambert")
+    assert "mask mask.png (its alpha channel: transparent = background)" in stdout
+    assert cutout["pixels"] == expected["pixels"]
+    assert angle_between(reference / "normals.exr", tmp_path / "cutout" / "normals.exr") < 1e-6
+
+    (folder / "mask.png").unlink()
+    subprocess.run(["oiiotool", CROP_CAT / "mask.png", "-d", "uint8", "-o", folder / "mask.jpg"],
+                   check=True)
+    stdout, jpeg = normals(folder, tmp_path / "jpeg", "--model", "lambert", "--mask",
+                           folder / "mask.jpg")
+    assert "(above half its largest value: lossy compression" in stdout
+    assert jpeg["pixels"] == pytest.approx(expected["pixels"], abs=expected["pixels"] * 0.002)
 
 
 def test_downscale_and_crop_keep_the_error(tmp_path):

@@ -107,6 +107,24 @@ TEST(LightFiles, EveryFormatGivesTheSameDirections) {
   }
 }
 
+// numpy.savetxt(header=...) writes "# ..." first; annotated exports put comments anywhere. A
+// comment keeps the line numbers of the lines after it.
+TEST(LightFiles, CommentLinesAreSkipped) {
+  const LightFile a = ParseLightFile("# lx ly lz\n0 0 1\n  # the ring\n0.6 0 0.8\n0 0.6 0.8\n",
+                                     "light_directions.txt", 3, nullptr);
+  EXPECT_EQ(a.format, "directions");
+  ASSERT_EQ(a.directions.size(), 3u);
+  EXPECT_LT((a.directions[1] - Vec3d(0.6, 0, 0.8)).norm(), 1e-12);
+  EXPECT_EQ(
+      ParseLightFile("# made by hand\n2\na.png 0 0 1\nb.png 0.6 0 0.8\n", "rig.lp", 0, nullptr)
+          .image_names,
+      (std::vector<std::string>{"a.png", "b.png"}));
+  EXPECT_EQ(ParseTriples("# r g b\n1 1 1\n2 2 2\n", "light_intensities.txt", 2)[1], Vec3d(2, 2, 2));
+  EXPECT_EQ(ParseFilenames("# photos\n001.png\n002.png\n", "filenames.txt", 10).size(), 2u);
+  EXPECT_EQ(ErrorOf([] { ParseTriples("# r g b\n1 1 1\n2 2\n", "light_intensities.txt", 2); }),
+            "light_intensities.txt:3: expected 3 numbers, got '2 2'");
+}
+
 TEST(LightFiles, CountsThatDisagreeAreNamed) {
   EXPECT_EQ(
       ErrorOf([] { ParseLightFile("4\n0 0 1\n0.6 0 0.8\n0 0.6 0.8\n", "lights.txt", 0, nullptr); }),

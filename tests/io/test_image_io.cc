@@ -79,6 +79,60 @@ TEST_F(ImageIoTest, FailedWriteLeavesNothingBehind) {
   EXPECT_TRUE(fs::is_empty(dir_));
 }
 
+// A mask is nonzero colour; a cut-out's alpha, where it varies, marks the object instead (its
+// transparent background may keep any colour: white here, the photo in practice); a JPEG's
+// compression leaves faint values around the object, so it is read above half its largest value.
+TEST_F(ImageIoTest, MasksAreReadAsTheirMakersMeantThem) {
+  const auto inside = [](int col, int row) { return col < 3 && row > 0; };  // 9 of 6×4
+  std::string how = "unset";
+  ImageF rgba(6, 4, 4, 1.0f);  // white everywhere, opaque on the object only
+  for (int row = 0; row < 4; ++row)
+    for (int col = 0; col < 6; ++col) rgba.at(col, row)[3] = inside(col, row) ? 1.0f : 0.0f;
+  WriteImage(Path("cutout.png"), rgba, {8, Encoding::kData});
+  Mask m = ReadMask(Path("cutout.png"), {}, &how);
+  EXPECT_EQ(m.count(), 9u);
+  for (int row = 0; row < 4; ++row)
+    for (int col = 0; col < 6; ++col) EXPECT_EQ(m.at(col, row), inside(col, row)) << col << row;
+  EXPECT_EQ(how, "its alpha channel: transparent = background");
+
+  ImageF grey_alpha(6, 4, 2, 1.0f);  // PNG's grey + alpha: channel 1 is alpha, not colour
+  for (int row = 0; row < 4; ++row)
+    for (int col = 0; col < 6; ++col) grey_alpha.at(col, row)[1] = inside(col, row) ? 1.0f : 0.0f;
+  WriteImage(Path("grey_alpha.png"), grey_alpha, {8, Encoding::kData});
+  EXPECT_EQ(ReadMask(Path("grey_alpha.png"), {}, &how).count(), 9u);
+  EXPECT_EQ(how, "its alpha channel: transparent = background");
+
+  // An opaque alpha says nothing: the colour decides, as in any mask.
+  ImageF opaque(6, 4, 4, 1.0f);
+  for (int row = 0; row < 4; ++row)
+    for (int col = 0; col < 6; ++col)
+      for (int c = 0; c < 3; ++c) opaque.at(col, row)[c] = inside(col, row) ? 1.0f : 0.0f;
+  WriteImage(Path("opaque.png"), opaque, {8, Encoding::kData});
+  m = ReadMask(Path("opaque.png"), {}, &how);
+  EXPECT_EQ(m.count(), 9u);
+  EXPECT_EQ(how, "");
+
+  // A disc in JPEG: its nonzero pixels are a ring wider than the disc; above half, the disc.
+  ImageF disc(48, 48, 3, 0.0f);
+  std::size_t disc_pixels = 0;
+  for (int row = 0; row < 48; ++row)
+    for (int col = 0; col < 48; ++col)
+      if (std::hypot(col - 23.5, row - 23.5) < 15) {
+        ++disc_pixels;
+        for (int c = 0; c < 3; ++c) disc.at(col, row)[c] = 1.0f;
+      }
+  WriteImage(Path("disc.jpg"), disc, {8, Encoding::kData});
+  const ImageF stored = ReadImage(Path("disc.jpg"));
+  std::size_t nonzero = 0;
+  for (std::size_t p = 0; p < stored.pixel_count(); ++p) nonzero += stored.pixels[3 * p] > 0;
+  ASSERT_GT(nonzero, disc_pixels + 20) << "the JPEG encoder left no ring to test against";
+  m = ReadMask(Path("disc.jpg"), {}, &how);
+  EXPECT_EQ(m.count(), disc_pixels);
+  EXPECT_EQ(how,
+            "above half its largest value: lossy compression leaves faint values around the "
+            "object");
+}
+
 TEST_F(ImageIoTest, CorruptAndMissingFilesAreNamedInTheError) {
   {
     std::ofstream corrupt(Path("corrupt.png"), std::ios::binary);
