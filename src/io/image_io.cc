@@ -36,7 +36,13 @@ constexpr double kMaxPixels = 2147483647.0;
 
 std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHeader* header) {
   const std::uint64_t file_bytes = RequireRegularFile(path);
-  auto in = OIIO::ImageInput::open(path);
+  // Camera raw files are developed by LibRaw, which OpenImageIO asks by default for the sRGB curve
+  // and each shot's own white balance: photometric stereo needs the sensor's linear values, with
+  // one set of channel gains for every photo of a capture (the camera's daylight multipliers).
+  OIIO::ImageSpec config;
+  config.attribute("raw:ColorSpace", "linear");
+  config.attribute("raw:use_camera_wb", 0);
+  auto in = OIIO::ImageInput::open(path, &config);
   if (!in) {
     std::string why = OIIO::geterror();
     Fail(path, why.empty() ? "cannot open as an image" : why);
@@ -287,6 +293,12 @@ StoredEncoding ReadStoredEncoding(const std::string& path) {
   e.bits = spec.get_int_attribute("oiio:BitsPerSample", static_cast<int>(spec.format.size()) * 8);
   in->close();
   if (e.header.is_float) return e;
+  if (e.format == "raw") {
+    e.stated = true;  // decoded linear above, whatever the camera's Exif says of its JPEGs
+    e.encoding = Encoding::kLinear;
+    e.statement = "camera raw, developed linear";
+    return e;
+  }
   if (e.format == "jpeg") {
     e.stated = true;
     e.encoding = Encoding::kSrgb;

@@ -68,8 +68,10 @@ ImageF ReadImage(const std::string& path, const MemoryLimit& memory = {},
 
 // How a file stores its values, and what it states about their encoding. Formats that state one:
 // JPEG (display-encoded, sRGB, by the format's own convention), PNG with an sRGB, iCCP or gAMA
-// chunk, any file with an Exif ColorSpace tag of sRGB. OpenImageIO reports "sRGB" for every PNG,
-// chunk or not, so PNG chunks are read here from the file itself.
+// chunk, any file with an Exif ColorSpace tag of sRGB, and camera raw (developed linear: every
+// reader here asks LibRaw for linear values and the camera's fixed daylight white balance).
+// OpenImageIO reports "sRGB" for every PNG, chunk or not, so PNG chunks are read here from the file
+// itself.
 struct StoredEncoding {
   ImageHeader header;   // size and sample type as declared (ReadImageHeader's checks)
   int bits = 8;         // per channel as stored
