@@ -7,6 +7,8 @@ packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libceres-dev
   libopencv-dev libopenimageio-dev openimageio-tools libmatio-dev
+  # A PNG's embedded colour profile (iCCP) is zlib-compressed; OpenImageIO 2.4 does not report it.
+  zlib1g-dev
   libcli11-dev nlohmann-json3-dev libopenmesh-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-pytest

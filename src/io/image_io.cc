@@ -2,15 +2,18 @@
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
+#include <vector>
 
 #include "core/errors.h"
 #include "io/files.h"
+#include "io/icc_profile.h"
 #include "io/image_internal.h"
 
 namespace iphong::io {
@@ -239,6 +242,11 @@ ImageF ReadImage(const std::string& path, const MemoryLimit& memory,
 
 namespace {
 
+// An iCCP chunk is read up to this size, its profile inflated up to kMaxIccProfile (display
+// profiles are a few kilobytes; a larger one is taken as a display profile unread).
+constexpr std::uint32_t kMaxIccChunk = 1u << 20;
+constexpr std::size_t kMaxIccProfile = std::size_t{4} << 20;
+
 // The chunks a PNG holds before its first IDAT that concern the encoding. Each chunk is a 4-byte
 // big-endian length, a 4-byte type, the data and a CRC.
 void ReadPngStatement(const std::string& path, StoredEncoding* e) {
@@ -257,12 +265,36 @@ void ReadPngStatement(const std::string& path, StoredEncoding* e) {
                                  (std::uint32_t(head[2]) << 8) | head[3];
     const std::string type(reinterpret_cast<const char*>(head + 4), 4);
     if (type == "IDAT" || type == "IEND") return;
-    if (type == "sRGB" || type == "iCCP") {
-      // An ICC profile in a PNG is a display profile (sRGB, Adobe RGB, Display P3): all encode
-      // with a curve close to sRGB's.
+    if (type == "iCCP") {
+      // name, NUL, compression method 0, then the profile as a zlib stream.
+      std::vector<unsigned char> chunk(std::min(length, kMaxIccChunk));
+      const bool read = length <= kMaxIccChunk && std::fread(chunk.data(), 1, length, f) == length;
+      const auto nul = std::find(chunk.begin(), chunk.end(), 0);
+      if (read && nul != chunk.end() && chunk.end() - nul > 2) {
+        std::vector<unsigned char> profile(kMaxIccProfile);
+        uLongf size = profile.size();
+        const auto* stream = &*(nul + 2);
+        if (uncompress(profile.data(), &size, stream, chunk.end() - nul - 2) == Z_OK) {
+          const IccTransfer icc = ReadIccTransfer(profile.data(), size);
+          if (icc.found) {
+            e->stated = true;
+            e->encoding = icc.linear ? Encoding::kLinear : Encoding::kSrgb;
+            e->statement = icc.statement;
+            return;
+          }
+        }
+      }
+      // A profile without a curve read here is a display profile (sRGB, Adobe RGB, Display P3):
+      // all encode with a curve close to sRGB's.
       e->stated = true;
       e->encoding = Encoding::kSrgb;
-      e->statement = type == "sRGB" ? "sRGB chunk" : "ICC profile";
+      e->statement = "ICC profile";
+      return;
+    }
+    if (type == "sRGB") {
+      e->stated = true;
+      e->encoding = Encoding::kSrgb;
+      e->statement = "sRGB chunk";
       return;
     }
     if (type == "gAMA" && length == 4) {
@@ -291,12 +323,22 @@ StoredEncoding ReadStoredEncoding(const std::string& path) {
   const OIIO::ImageSpec& spec = in->spec();
   e.format = in->format_name();
   e.bits = spec.get_int_attribute("oiio:BitsPerSample", static_cast<int>(spec.format.size()) * 8);
+  IccTransfer icc;
+  if (const OIIO::ParamValue* p = spec.find_attribute("ICCProfile")) {
+    icc = ReadIccTransfer(static_cast<const unsigned char*>(p->data()), p->type().size());
+  }
   in->close();
   if (e.header.is_float) return e;
   if (e.format == "raw") {
     e.stated = true;  // decoded linear above, whatever the camera's Exif says of its JPEGs
     e.encoding = Encoding::kLinear;
     e.statement = "camera raw, developed linear";
+    return e;
+  }
+  if (icc.found) {  // the profile's own curve, before any format's convention
+    e.stated = true;
+    e.encoding = icc.linear ? Encoding::kLinear : Encoding::kSrgb;
+    e.statement = icc.statement;
     return e;
   }
   if (e.format == "jpeg") {

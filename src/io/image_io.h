@@ -67,7 +67,9 @@ ImageF ReadImage(const std::string& path, const MemoryLimit& memory = {},
                  int orientation = kFileOrientation);
 
 // How a file stores its values, and what it states about their encoding. Formats that state one:
-// JPEG (display-encoded, sRGB, by the format's own convention), PNG with an sRGB, iCCP or gAMA
+// any file with an ICC profile whose curve is linear or a display gamma (io/icc_profile.h; first,
+// as the profile is what colour-managed software reads), JPEG (display-encoded, sRGB, by the
+// format's own convention), PNG with an sRGB, iCCP (a profile without such a curve) or gAMA
 // chunk, any file with an Exif ColorSpace tag of sRGB, and camera raw (developed linear: every
 // reader here asks LibRaw for linear values and the camera's fixed daylight white balance).
 // OpenImageIO reports "sRGB" for every PNG, chunk or not, so PNG chunks are read here from the file

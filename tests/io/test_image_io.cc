@@ -8,7 +8,9 @@
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
 
+#include "io/icc_profile.h"
 #include "io/image_io.h"
 #include "io/image_rows.h"
 
@@ -230,6 +232,108 @@ TEST_F(ImageIoTest, CameraRawIsDevelopedLinear) {
     // of two exposures is the sensor's.
     EXPECT_NEAR(high / low, 4.0, 0.01) << c;  // the sRGB curve: 1.89
   }
+}
+
+// An ICC profile of one tag, `trc` (a 'curv' or 'para' element) under `name` (rTRC or kTRC).
+std::string IccProfile(const std::string& trc, const std::string& name = "rTRC") {
+  const auto be32 = [](std::uint32_t v) {
+    return std::string{char(v >> 24), char((v >> 16) & 0xff), char((v >> 8) & 0xff),
+                       char(v & 0xff)};
+  };
+  // The header as libpng checks it: v4.3, a display's RGB (or grey) profile to XYZ under D50.
+  std::string header(128, '\0');
+  const std::string element = trc + std::string((4 - trc.size() % 4) % 4, '\0');
+  header.replace(0, 4, be32(128 + 4 + 12 + static_cast<std::uint32_t>(element.size())));
+  header.replace(8, 4, be32(0x04300000));
+  header.replace(12, 12, std::string("mntr") + (name == "kTRC" ? "GRAY" : "RGB ") + "XYZ ");
+  header.replace(36, 4, "acsp");
+  header.replace(68, 12, be32(0xF6D6) + be32(0x10000) + be32(0xD32D));
+  return header + be32(1) + name + be32(144) + be32(static_cast<std::uint32_t>(trc.size())) +
+         element;
+}
+std::string Curv(const std::vector<std::uint16_t>& entries) {
+  std::string out = std::string("curv") + std::string(4, '\0');
+  const std::uint32_t n = static_cast<std::uint32_t>(entries.size());
+  out += {char(n >> 24), char((n >> 16) & 0xff), char((n >> 8) & 0xff), char(n & 0xff)};
+  for (std::uint16_t v : entries) out += {char(v >> 8), char(v & 0xff)};
+  return out;
+}
+std::string Para(int function, const std::vector<double>& parameters) {
+  std::string out = std::string("para") + std::string(4, '\0');
+  out += {char(0), char(function), char(0), char(0)};
+  for (double v : parameters) {
+    const auto f = static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(v * 65536)));
+    out += {char(f >> 24), char((f >> 16) & 0xff), char((f >> 8) & 0xff), char(f & 0xff)};
+  }
+  return out;
+}
+IccTransfer Transfer(const std::string& profile) {
+  return ReadIccTransfer(reinterpret_cast<const unsigned char*>(profile.data()), profile.size());
+}
+
+// The curves raw developers and colour-managed editors embed, read as the ICC spec defines them.
+TEST(IccProfile, TheToneCurveSaysLinearOrDisplayEncoded) {
+  IccTransfer t = Transfer(IccProfile(Curv({})));  // identity: darktable's linear profiles
+  EXPECT_TRUE(t.found && t.linear);
+  EXPECT_EQ(t.statement, "ICC profile, linear");
+  t = Transfer(IccProfile(Curv({256})));  // gamma 1.0 as u8Fixed8
+  EXPECT_TRUE(t.found && t.linear);
+  t = Transfer(IccProfile(Curv({563}), "kTRC"));  // 2.2 (563/256 = 2.199), a grey profile
+  EXPECT_TRUE(t.found && !t.linear);
+  EXPECT_NEAR(t.gamma, 2.199, 1e-3);
+  EXPECT_EQ(t.statement, "ICC profile, gamma 2.2");
+  t = Transfer(IccProfile(Curv({0, 65535})));  // a two-point table: linear
+  EXPECT_TRUE(t.found && t.linear);
+  std::vector<std::uint16_t> table(1024);  // the sRGB decoding curve, sampled
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    const double x = i / 1023.0;
+    table[i] = static_cast<std::uint16_t>(
+        std::lround(65535 * (x <= 0.04045 ? x / 12.92 : std::pow((x + 0.055) / 1.055, 2.4))));
+  }
+  t = Transfer(IccProfile(Curv(table)));
+  EXPECT_TRUE(t.found && !t.linear);
+  EXPECT_NEAR(t.gamma, std::log(std::pow((0.5 + 0.055) / 1.055, 2.4)) / std::log(0.5), 1e-3);
+  // sRGB as ICC v4 writes it: parametric type 3.
+  t = Transfer(IccProfile(Para(3, {2.4, 1 / 1.055, 0.055 / 1.055, 1 / 12.92, 0.04045})));
+  EXPECT_TRUE(t.found && !t.linear);
+  EXPECT_NEAR(t.gamma, 2.22, 0.01);
+  t = Transfer(IccProfile(Para(0, {1.0})));
+  EXPECT_TRUE(t.found && t.linear);
+  // What is not understood says nothing: a gamma of 1.2, no curve tag, a truncated profile.
+  EXPECT_FALSE(Transfer(IccProfile(Curv({307}))).found);
+  EXPECT_FALSE(Transfer(IccProfile(Curv({}), "gTRC")).found);
+  const std::string whole = IccProfile(Curv(table));
+  EXPECT_FALSE(Transfer(whole.substr(0, whole.size() - 10)).found);
+  EXPECT_FALSE(Transfer(whole.substr(0, 100)).found);
+}
+
+// A 16-bit TIFF exported linear with its profile, and a PNG whose iCCP profile is linear, are read
+// as linear (the PNG's iCCP chunk used to count as sRGB whatever it held); a gamma profile is not.
+TEST_F(ImageIoTest, AnEmbeddedProfileStatesTheEncoding) {
+  const auto write = [&](const std::string& name, const std::string& profile) {
+    OIIO::ImageSpec spec(8, 6, 3, OIIO::TypeDesc::UINT16);
+    spec.attribute("ICCProfile", OIIO::TypeDesc(OIIO::TypeDesc::UINT8, profile.size()),
+                   profile.data());
+    std::vector<std::uint16_t> pixels(8 * 6 * 3, 20000);
+    auto out = OIIO::ImageOutput::create(Path(name));
+    ASSERT_TRUE(out && out->open(Path(name), spec) &&
+                out->write_image(OIIO::TypeDesc::UINT16, pixels.data()) && out->close());
+  };
+  write("linear.tif", IccProfile(Curv({})));
+  StoredEncoding e = ReadStoredEncoding(Path("linear.tif"));
+  EXPECT_TRUE(e.stated);
+  EXPECT_EQ(e.encoding, Encoding::kLinear);
+  EXPECT_EQ(e.statement, "ICC profile, linear");
+  write("adobe.tif", IccProfile(Curv({563})));
+  e = ReadStoredEncoding(Path("adobe.tif"));
+  EXPECT_TRUE(e.stated);
+  EXPECT_EQ(e.encoding, Encoding::kSrgb);
+  EXPECT_EQ(e.statement, "ICC profile, gamma 2.2");
+  write("linear.png", IccProfile(Curv({})));
+  e = ReadStoredEncoding(Path("linear.png"));
+  EXPECT_TRUE(e.stated);
+  EXPECT_EQ(e.encoding, Encoding::kLinear);
+  EXPECT_EQ(e.statement, "ICC profile, linear");
 }
 
 TEST_F(ImageIoTest, CorruptAndMissingFilesAreNamedInTheError) {
