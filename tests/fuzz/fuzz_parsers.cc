@@ -1,6 +1,7 @@
 // Fuzz target for the text iphong reads: filenames.txt, the light files (every format),
-// normal.txt, material.json, scene files and the near-light layout's camera.json and
-// light_anisotropy.txt. The first byte picks the parser, the rest is the text. Every input must end
+// normal.txt, material.json, scene files, the near-light layout's camera.json and
+// light_anisotropy.txt, and the ICC profiles embedded in pictures (binary: it must give a result
+// and never throw). The first byte picks the parser, the rest is the text. Every input must end
 // in a result or in an exception whose message is one line starting with the file it names;
 // anything else (a crash, a sanitizer report, std::bad_alloc, a multi-line or unnamed message) is a
 // finding.
@@ -16,6 +17,7 @@
 
 #include "fuzz_parsers.h"
 #include "io/dataset_text.h"
+#include "io/icc_profile.h"
 #include "io/scene_file.h"
 
 namespace {
@@ -32,10 +34,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size == 0) return 0;
   const std::string text(reinterpret_cast<const char*>(data) + 1, size - 1);
   static const char* const kSources[] = {
-      "filenames.txt",       "light_directions.txt", "light_intensities.txt",
-      "normal.txt",          "material.json",        "scene.json",
-      "capture.lp",          "lights.json",          "camera.json",
-      "light_anisotropy.txt"};
+      "filenames.txt",        "light_directions.txt", "light_intensities.txt",
+      "normal.txt",           "material.json",        "scene.json",
+      "capture.lp",           "lights.json",          "camera.json",
+      "light_anisotropy.txt", "profile.icc"};
   static_assert(sizeof kSources / sizeof kSources[0] == kFuzzParsers);
   const int parser = data[0] % kFuzzParsers;
   const std::string source = kSources[parser];
@@ -68,6 +70,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       case 9:
         ParseScalars(text, source, 12);
         break;
+      case 10: {
+        const IccTransfer t =
+            ReadIccTransfer(reinterpret_cast<const unsigned char*>(text.data()), text.size());
+        if (t.found && t.statement.empty()) Finding("an ICC curve read without a statement", text);
+        break;
+      }
       default: {
         // No files are read from a fuzzed scene (base folder "": relative mesh paths do not
         // exist), and what the shapes would build is held to 64 MB.
