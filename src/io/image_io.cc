@@ -242,10 +242,10 @@ ImageF ReadImage(const std::string& path, const MemoryLimit& memory,
 
 namespace {
 
-// An iCCP chunk is read up to this size, its profile inflated up to kMaxIccProfile (display
-// profiles are a few kilobytes; a larger one is taken as a display profile unread).
+// An iCCP chunk is read, and its profile inflated, up to 1 MB each (display profiles are a few
+// kilobytes; a larger one, a printer's tables, is taken as a display profile unread).
 constexpr std::uint32_t kMaxIccChunk = 1u << 20;
-constexpr std::size_t kMaxIccProfile = std::size_t{4} << 20;
+constexpr std::size_t kMaxIccProfile = std::size_t{1} << 20;
 
 // The chunks a PNG holds before its first IDAT that concern the encoding. Each chunk is a 4-byte
 // big-endian length, a 4-byte type, the data and a CRC.
