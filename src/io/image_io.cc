@@ -248,8 +248,10 @@ constexpr std::uint32_t kMaxIccChunk = 1u << 20;
 constexpr std::size_t kMaxIccProfile = std::size_t{1} << 20;
 
 // The chunks a PNG holds before its first IDAT that concern the encoding. Each chunk is a 4-byte
-// big-endian length, a 4-byte type, the data and a CRC.
-void ReadPngStatement(const std::string& path, StoredEncoding* e) {
+// big-endian length, a 4-byte type, the data and a CRC. An iCCP chunk's profile, inflated, goes to
+// `profile` (OpenImageIO 2.4 does not report a PNG's).
+void ReadPngStatement(const std::string& path, StoredEncoding* e,
+                      std::vector<unsigned char>* profile) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (f == nullptr) return;
   struct Close {
@@ -266,29 +268,20 @@ void ReadPngStatement(const std::string& path, StoredEncoding* e) {
     const std::string type(reinterpret_cast<const char*>(head + 4), 4);
     if (type == "IDAT" || type == "IEND") return;
     if (type == "iCCP") {
-      // name, NUL, compression method 0, then the profile as a zlib stream.
-      std::vector<unsigned char> chunk(std::min(length, kMaxIccChunk));
-      const bool read = length <= kMaxIccChunk && std::fread(chunk.data(), 1, length, f) == length;
-      const auto nul = std::find(chunk.begin(), chunk.end(), 0);
-      if (read && nul != chunk.end() && chunk.end() - nul > 2) {
-        std::vector<unsigned char> profile(kMaxIccProfile);
-        uLongf size = profile.size();
-        const auto* stream = &*(nul + 2);
-        if (uncompress(profile.data(), &size, stream, chunk.end() - nul - 2) == Z_OK) {
-          const IccTransfer icc = ReadIccTransfer(profile.data(), size);
-          if (icc.found) {
-            e->stated = true;
-            e->encoding = icc.linear ? Encoding::kLinear : Encoding::kSrgb;
-            e->statement = icc.statement;
-            return;
-          }
-        }
-      }
-      // A profile without a curve read here is a display profile (sRGB, Adobe RGB, Display P3):
+      // name, NUL, compression method 0, then the profile as a zlib stream. A profile whose
+      // curve ReadStoredEncoding cannot read is a display profile (sRGB, Adobe RGB, Display P3):
       // all encode with a curve close to sRGB's.
       e->stated = true;
       e->encoding = Encoding::kSrgb;
       e->statement = "ICC profile";
+      std::vector<unsigned char> chunk(std::min(length, kMaxIccChunk));
+      if (length > kMaxIccChunk || std::fread(chunk.data(), 1, length, f) != length) return;
+      const auto nul = std::find(chunk.begin(), chunk.end(), 0);
+      if (chunk.end() - nul <= 2) return;
+      profile->resize(kMaxIccProfile);
+      uLongf size = profile->size();
+      if (uncompress(profile->data(), &size, &*(nul + 2), chunk.end() - nul - 2) != Z_OK) size = 0;
+      profile->resize(size);
       return;
     }
     if (type == "sRGB") {
@@ -323,9 +316,10 @@ StoredEncoding ReadStoredEncoding(const std::string& path) {
   const OIIO::ImageSpec& spec = in->spec();
   e.format = in->format_name();
   e.bits = spec.get_int_attribute("oiio:BitsPerSample", static_cast<int>(spec.format.size()) * 8);
-  IccTransfer icc;
+  std::vector<unsigned char> profile;
   if (const OIIO::ParamValue* p = spec.find_attribute("ICCProfile")) {
-    icc = ReadIccTransfer(static_cast<const unsigned char*>(p->data()), p->type().size());
+    const auto* bytes = static_cast<const unsigned char*>(p->data());
+    profile.assign(bytes, bytes + p->type().size());
   }
   in->close();
   if (e.header.is_float) return e;
@@ -335,7 +329,9 @@ StoredEncoding ReadStoredEncoding(const std::string& path) {
     e.statement = "camera raw, developed linear";
     return e;
   }
-  if (icc.found) {  // the profile's own curve, before any format's convention
+  if (e.format == "png") ReadPngStatement(path, &e, &profile);
+  // The profile's own curve, before any format's convention.
+  if (const IccTransfer icc = ReadIccTransfer(profile.data(), profile.size()); icc.found) {
     e.stated = true;
     e.encoding = icc.linear ? Encoding::kLinear : Encoding::kSrgb;
     e.statement = icc.statement;
@@ -345,8 +341,6 @@ StoredEncoding ReadStoredEncoding(const std::string& path) {
     e.stated = true;
     e.encoding = Encoding::kSrgb;
     e.statement = "JPEG";
-  } else if (e.format == "png") {
-    ReadPngStatement(path, &e);
   }
   if (!e.stated && spec.get_int_attribute("Exif:ColorSpace", 0) == 1) {
     e.stated = true;

@@ -15,6 +15,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size);
 
+#include "../io/icc_test_profiles.h"
 #include "fuzz_parsers.h"
 
 namespace {
@@ -56,20 +57,9 @@ std::vector<std::string> Seeds(const fs::path& fixtures) {
   for (int i = 0; i < 12; ++i) anisotropy += i % 3 ? "1\n" : "0.5\n";
   add(9, anisotropy);
   // ICC profiles of one red curve: a 'curv' gamma 2.2 and a 'para' (sRGB's parameters).
-  const auto be32 = [](std::uint32_t v) {
-    return std::string{char(v >> 24), char((v >> 16) & 0xff), char((v >> 8) & 0xff),
-                       char(v & 0xff)};
-  };
-  const auto profile = [&](const std::string& curve) {
-    std::string header(128, '\0');
-    header.replace(0, 4, be32(144 + static_cast<std::uint32_t>(curve.size())));
-    header.replace(36, 4, "acsp");
-    return header + be32(1) + "rTRC" + be32(144) + be32(static_cast<std::uint32_t>(curve.size())) +
-           curve;
-  };
-  add(10, profile(std::string("curv") + be32(0) + be32(1) + std::string("\x02\x33", 2)));
-  add(10, profile(std::string("para") + be32(0) + std::string("\0\x03\0\0", 4) + be32(157286) +
-                  be32(62119) + be32(3417) + be32(5072) + be32(2651)));
+  add(10, iphong::io::icc_test::IccProfile(iphong::io::icc_test::Curv({563})));
+  add(10, iphong::io::icc_test::IccProfile(
+              iphong::io::icc_test::Para(3, {2.4, 1 / 1.055, 0.055 / 1.055, 1 / 12.92, 0.04045})));
   for (const char* folder : {"scenes", "bad/scenes"}) {
     for (const auto& entry : fs::directory_iterator(fixtures / folder)) {
       if (entry.path().extension() == ".json") add(5, Read(entry.path()));

@@ -10,6 +10,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 
+#include "icc_test_profiles.h"
 #include "io/icc_profile.h"
 #include "io/image_io.h"
 #include "io/image_rows.h"
@@ -86,14 +87,17 @@ TEST_F(ImageIoTest, FailedWriteLeavesNothingBehind) {
 // transparent background may keep any colour: white here, the photo in practice); a JPEG's
 // compression leaves faint values around the object, so it is read above half its largest value.
 TEST_F(ImageIoTest, MasksAreReadAsTheirMakersMeantThem) {
-  const auto inside = [](int col, int row) { return col < 3 && row > 0; };  // 9 of 6×4
+  const auto inside = [](int col, int row) { return col < 3 && row > 0; };
+  std::size_t object = 0;
+  for (int row = 0; row < 4; ++row)
+    for (int col = 0; col < 6; ++col) object += inside(col, row);
   std::string how = "unset";
   ImageF rgba(6, 4, 4, 1.0f);  // white everywhere, opaque on the object only
   for (int row = 0; row < 4; ++row)
     for (int col = 0; col < 6; ++col) rgba.at(col, row)[3] = inside(col, row) ? 1.0f : 0.0f;
   WriteImage(Path("cutout.png"), rgba, {8, Encoding::kData});
   Mask m = ReadMask(Path("cutout.png"), {}, &how);
-  EXPECT_EQ(m.count(), 9u);
+  EXPECT_EQ(m.count(), object);
   for (int row = 0; row < 4; ++row)
     for (int col = 0; col < 6; ++col) EXPECT_EQ(m.at(col, row), inside(col, row)) << col << row;
   EXPECT_EQ(how, "its alpha channel: transparent = background");
@@ -102,7 +106,7 @@ TEST_F(ImageIoTest, MasksAreReadAsTheirMakersMeantThem) {
   for (int row = 0; row < 4; ++row)
     for (int col = 0; col < 6; ++col) grey_alpha.at(col, row)[1] = inside(col, row) ? 1.0f : 0.0f;
   WriteImage(Path("grey_alpha.png"), grey_alpha, {8, Encoding::kData});
-  EXPECT_EQ(ReadMask(Path("grey_alpha.png"), {}, &how).count(), 9u);
+  EXPECT_EQ(ReadMask(Path("grey_alpha.png"), {}, &how).count(), object);
   EXPECT_EQ(how, "its alpha channel: transparent = background");
 
   // An opaque alpha says nothing: the colour decides, as in any mask.
@@ -112,7 +116,7 @@ TEST_F(ImageIoTest, MasksAreReadAsTheirMakersMeantThem) {
       for (int c = 0; c < 3; ++c) opaque.at(col, row)[c] = inside(col, row) ? 1.0f : 0.0f;
   WriteImage(Path("opaque.png"), opaque, {8, Encoding::kData});
   m = ReadMask(Path("opaque.png"), {}, &how);
-  EXPECT_EQ(m.count(), 9u);
+  EXPECT_EQ(m.count(), object);
   EXPECT_EQ(how, "");
 
   // A disc in JPEG: its nonzero pixels are a ring wider than the disc; above half, the disc.
@@ -178,13 +182,11 @@ void WriteLinearDng(const std::string& path, int width, int height,
       {50721, 10, 9, u32({1, 1, 0, 1, 0, 1, 0, 1, 1, 1, 0, 1, 0, 1, 0, 1, 1, 1})},  // identity
       {50728, 5, 3, u32({1, 1, 1, 1, 1, 1})},                                       // AsShotNeutral
   };
+  // Header, IFD, the values longer than 4 bytes, then the strip.
   std::uint32_t offset = 8 + 2 + 12 * static_cast<std::uint32_t>(entries.size()) + 4;
+  std::uint32_t data_offset = offset;
+  for (const Entry& e : entries) data_offset += e.bytes.size() > 4 ? e.bytes.size() : 0;
   std::string ifd = u16({static_cast<std::uint16_t>(entries.size())}), blobs;
-  for (const Entry& e : entries) {
-    if (e.bytes.size() > 4) offset += static_cast<std::uint32_t>(e.bytes.size());
-  }
-  const std::uint32_t data_offset = offset;
-  offset = 8 + 2 + 12 * static_cast<std::uint32_t>(entries.size()) + 4;
   for (const Entry& e : entries) {
     std::string value = e.tag == 273 ? u32({data_offset}) : e.bytes;
     ifd += u16({e.tag, e.type}) + u32({e.count});
@@ -234,39 +236,10 @@ TEST_F(ImageIoTest, CameraRawIsDevelopedLinear) {
   }
 }
 
-// An ICC profile of one tag, `trc` (a 'curv' or 'para' element) under `name` (rTRC or kTRC).
-std::string IccProfile(const std::string& trc, const std::string& name = "rTRC") {
-  const auto be32 = [](std::uint32_t v) {
-    return std::string{char(v >> 24), char((v >> 16) & 0xff), char((v >> 8) & 0xff),
-                       char(v & 0xff)};
-  };
-  // The header as libpng checks it: v4.3, a display's RGB (or grey) profile to XYZ under D50.
-  std::string header(128, '\0');
-  const std::string element = trc + std::string((4 - trc.size() % 4) % 4, '\0');
-  header.replace(0, 4, be32(128 + 4 + 12 + static_cast<std::uint32_t>(element.size())));
-  header.replace(8, 4, be32(0x04300000));
-  header.replace(12, 12, std::string("mntr") + (name == "kTRC" ? "GRAY" : "RGB ") + "XYZ ");
-  header.replace(36, 4, "acsp");
-  header.replace(68, 12, be32(0xF6D6) + be32(0x10000) + be32(0xD32D));
-  return header + be32(1) + name + be32(144) + be32(static_cast<std::uint32_t>(trc.size())) +
-         element;
-}
-std::string Curv(const std::vector<std::uint16_t>& entries) {
-  std::string out = std::string("curv") + std::string(4, '\0');
-  const std::uint32_t n = static_cast<std::uint32_t>(entries.size());
-  out += {char(n >> 24), char((n >> 16) & 0xff), char((n >> 8) & 0xff), char(n & 0xff)};
-  for (std::uint16_t v : entries) out += {char(v >> 8), char(v & 0xff)};
-  return out;
-}
-std::string Para(int function, const std::vector<double>& parameters) {
-  std::string out = std::string("para") + std::string(4, '\0');
-  out += {char(0), char(function), char(0), char(0)};
-  for (double v : parameters) {
-    const auto f = static_cast<std::uint32_t>(static_cast<std::int32_t>(std::lround(v * 65536)));
-    out += {char(f >> 24), char((f >> 16) & 0xff), char((f >> 8) & 0xff), char(f & 0xff)};
-  }
-  return out;
-}
+using icc_test::Curv;
+using icc_test::IccProfile;
+using icc_test::Para;
+
 IccTransfer Transfer(const std::string& profile) {
   return ReadIccTransfer(reinterpret_cast<const unsigned char*>(profile.data()), profile.size());
 }
