@@ -460,6 +460,47 @@ std::string DescribeImageCounts(const Dataset& d) {
                     "inverted (exposure factors)?",
                     d.files.intensities_source.c_str(), file_misfit, plain_misfit);
       text += (text.empty() ? "" : "; ") + std::string(line);
+    } else if (usable && file_misfit > kIntensityOrderFloor) {
+      // A file read a line off fits better than none (the intensities vary smoothly over the
+      // dome) yet moves the normals 6-10 deg on DiLiGenT. The file's own re-readings (shifted
+      // by s lines, reversed) are the likelier orders; the images were taken in one of them, so
+      // the reading that fits best is the one to name when it beats the file as listed.
+      Eigen::VectorXd intensity(k);
+      for (int j = 0; j < k; ++j) intensity(j) = d.light_intensities[j].mean();
+      double best = file_misfit;
+      int best_shift = 0;
+      bool best_reversed = false;
+      for (const bool reversed : {false, true}) {
+        for (int s = 0; s < k; ++s) {
+          if (s == 0 && !reversed) continue;
+          Eigen::VectorXd y(k);
+          for (int j = 0; j < k; ++j) {
+            const int line_index = reversed ? (k - 1 - j + s) % k : (j + s) % k;
+            y(j) = intensity(line_index) > 0 ? without(j) / intensity(line_index) : 0.0;
+          }
+          const double m = misfit(y);
+          if (m < best) best = m, best_shift = s, best_reversed = reversed;
+        }
+      }
+      if (best * kIntensityOrderMargin < file_misfit) {
+        char reading[120];
+        const int shift = best_shift > k / 2 ? best_shift - k : best_shift;
+        if (best_reversed) {
+          std::snprintf(reading, sizeof reading, "in reverse order (image 1 on line %d)",
+                        (k - 1 + best_shift) % k + 1);
+        } else {
+          std::snprintf(reading, sizeof reading, "%d line%s %s (image 1 on line %d)",
+                        std::abs(shift), std::abs(shift) == 1 ? "" : "s",
+                        shift > 0 ? "further down" : "further up", best_shift + 1);
+        }
+        std::snprintf(line, sizeof line,
+                      "%s: the images' brightness follows their lights' directions better with "
+                      "these intensities read %s than as listed (misfit %.3f against %.3f of the "
+                      "mean): is the file a line off from the images (a header line, a light "
+                      "missing at the top, images numbered from 0 and lights from 1)?",
+                      d.files.intensities_source.c_str(), reading, best, file_misfit);
+        text += (text.empty() ? "" : "; ") + std::string(line);
+      }
     }
   }
   // Images identical inside the mask: the first of each group and how many repeat it.

@@ -239,6 +239,26 @@ def test_masks_as_photo_editors_save_them_and_commented_light_files(tmp_path):
     assert jpeg["pixels"] == pytest.approx(expected["pixels"], abs=expected["pixels"] * 0.002)
 
 
+def test_an_intensity_file_a_line_off_is_named_and_the_right_one_is_not(tmp_path):
+    """DiLiGenT's cat with its intensity file a line off (a line added at the top, the last one
+    lost): it fits the images better than no file, so only its own re-readings show it."""
+    names = (CROP_CAT / "filenames.txt").read_text().split()
+    folder = tmp_path / "cat"
+    folder.mkdir()
+    for name in names + ["filenames.txt", "light_directions.txt", "mask.png"]:
+        link(CROP_CAT / name, folder / name)
+    lines = (CROP_CAT / "light_intensities.txt").read_text().split("\n")[:len(names)]
+    (folder / "light_intensities.txt").write_text("\n".join([lines[-1]] + lines[:-1]) + "\n")
+    code, _, stderr = run("normals", folder, "-o", tmp_path / "off", "--model", "lambert")
+    assert code == 0, stderr
+    assert ("light_intensities.txt: the images' brightness follows their lights' directions "
+            "better with these intensities read 1 line further down (image 1 on line 2) than "
+            "as listed") in stderr
+    code, _, stderr = run("normals", CROP_CAT, "-o", tmp_path / "right", "--model", "lambert")
+    assert code == 0, stderr
+    assert "light_intensities.txt" not in stderr
+
+
 def test_downscale_and_crop_keep_the_error(tmp_path):
     _, full = crop_cat_run(tmp_path)
     _, half = normals(CROP_CAT, tmp_path / "half", "--downscale", "2")
