@@ -174,7 +174,8 @@ void BindRender(py::module_& m) {
       py::arg("images") = "",
       R"doc(Read a capture folder into numpy arrays: any layout `iphong normals` reads (DiLiGenT,
 UW, RTI .lp, a folder of images with a light file), with the same options (images: a list of the
-photos in light order; lights, intensities, mask: files; encoding "auto"/"linear"/"srgb"; crop
+photos in light order; lights, intensities, mask: files, intensities "none" for all 1 whatever
+file the capture holds; encoding "auto"/"linear"/"srgb"; crop
 (x, y, w, h) in the files' pixels; downscale N).
 Returns images (K, H, W, 3) float32 linear, light_directions (K, 3), light_intensities (K, 3),
 mask (H, W) bool, normal_gt (H, W, 3) or None, material (dict) or None, filenames, warnings,

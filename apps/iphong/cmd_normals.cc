@@ -230,11 +230,22 @@ void RunNormals(const NormalsCommandOptions& o) {
                     "most %.1f%%), and the normals under the two by %.2f deg on average",
                     source.c_str(), 100 * c.median_relative, 100 * c.max_relative,
                     c.normals_moved_deg);
-      if (c.normals_moved_deg > 1) {
+      // Past a degree the images cannot say which set is right (the estimate reads what
+      // Lambert's law explains in them, cast shadows, interreflections and fall-off included),
+      // and a file measured on a target is usually the better: refused, unless the images
+      // contradict the file itself (another order, another capture's), where the estimate is
+      // the one left standing.
+      const std::string contradicted = io::DescribeIntensityFile(dataset);
+      if (c.normals_moved_deg > 1 && contradicted.empty()) {
+        throw std::runtime_error(
+            std::string(text) +
+            ": the images cannot tell which set is right, and intensities measured on a target "
+            "are usually the better ones; nothing written. Run without --estimate-intensities "
+            "to use the file's, or add --intensities none to use the estimate unchecked");
+      } else if (c.normals_moved_deg > 1) {
         Warn(std::string(text) +
-             ": one of them is off (the estimate reads what Lambert's law explains in the images, "
-             "cast shadows and interreflections included; intensities measured on a target are "
-             "usually the better ones): compare with a run without --estimate-intensities");
+             ": the images contradict the file (said above), so the estimate is used; check the "
+             "file against the images' order");
       } else {
         Say(o.common, "%s (compared in %.1f s)\n", text, c.seconds);
       }
@@ -621,8 +632,10 @@ void AddNormalsCommand(CLI::App& app) {
   cmd->add_flag("--estimate-intensities", o->estimate_intensities,
                 "Estimate each light's RGB intensity with the normals (semi-calibrated; an "
                 "intensity file is not used for the normals, only compared with: how far apart "
-                "the two runs' normals are is said, and without one a warning says the estimate "
-                "is unchecked; written as light_intensities.txt, each channel's mean 1)");
+                "the two runs' normals are is said, and past a degree the run is refused unless "
+                "the images contradict the file; with --intensities none, or no file, a warning "
+                "says the estimate is unchecked; written as light_intensities.txt, each "
+                "channel's mean 1)");
   cmd->add_option("--error-range", o->error_range,
                   "With ground truth: degrees at the top of error.png's colour scale, so maps of "
                   "several runs compare (default: from the data, the 95th percentile rounded up)")

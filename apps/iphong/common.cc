@@ -82,7 +82,8 @@ void AddCaptureOptions(CLI::App* cmd, CaptureFlags& f) {
                   "Light file: directions per line, UW lights.txt (count line), RTI .lp, or "
                   "AliceVision lights JSON (default: found in the folder or its parent)");
   cmd->add_option("--intensities", f.options.intensities,
-                  "Light intensities, 'r g b' per light (default: light_intensities.txt, else 1)");
+                  "Light intensities, 'r g b' per light (default: light_intensities.txt, else 1; "
+                  "'none': all 1, whatever intensity file the capture holds)");
   cmd->add_option("--images", f.options.images,
                   "A text file naming the photos in light order, one per line (default: "
                   "filenames.txt, the .lp, FOLDER.txt here or one folder up, images.txt; else "

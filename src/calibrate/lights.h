@@ -231,7 +231,7 @@ IntensityEstimate EstimateIntensities(const solve::PhotometricData& data,
 // (docs/guides/calibrating-lights.md): said wherever an estimate is made with none to compare
 // against (the command line's warning, the Python docstring).
 inline constexpr const char* kUncheckedEstimateNote =
-    "where calibrated intensities were known, the estimate's normals were 1.0-3.2 deg from "
+    "where calibrated intensities were known, the estimate's normals were 1.2-3.7 deg from "
     "theirs (DiLiGenT ball and cat, their crops, a rendered bunny), because a fall-off or "
     "reflectance that varies with the light's direction reads as intensity and the photos cannot "
     "tell the two apart";

@@ -396,6 +396,12 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
   if (!options.lights_needed) {
     c.light_intensities.assign(c.names.size(), Vec3d::Ones());
     c.intensities_source = "not read (not needed)";
+  } else if (options.intensities == kNoIntensities) {
+    // The capture's own file (or the .lp's, the rig's) set aside without touching the folder.
+    c.light_intensities.assign(c.names.size(), Vec3d::Ones());
+    c.intensities_source = "all 1 (--intensities none)";
+    c.intensities_from_file = false;
+    intensities.clear();
   } else if (intensities.empty() && Exists(dir / "light_intensities.txt")) {
     intensities = dir / "light_intensities.txt";
   }

@@ -32,9 +32,13 @@
 
 namespace iphong::io {
 
+// CaptureOptions::intensities naming no file: every light's intensity 1, whatever intensity file
+// the capture holds (`--intensities none`).
+inline constexpr const char* kNoIntensities = "none";
+
 struct CaptureOptions {
   std::string lights;       // a light file; "" = find one
-  std::string intensities;  // "r g b" per light; "" = find one
+  std::string intensities;  // "r g b" per light; "" = find one; kNoIntensities = all 1
   std::string mask;         // a mask picture; "" = find one
   // A list of the photos in light order (io/image_list.h); "" = the layout's own.
   std::string images;

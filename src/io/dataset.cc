@@ -339,6 +339,109 @@ std::string AllMaskedBlack(const Dataset& d) {
                          : " (a mask marking the background? Nonzero marks the object)");
 }
 
+namespace {
+
+// Each image's mean inside the mask, and the same over its light's intensity.
+struct MaskMeans {
+  std::vector<double> mean, brightness;
+};
+MaskMeans MeansInsideMask(const Dataset& d) {
+  MaskMeans m;
+  for (std::size_t j = 0; j < d.image_counts.size(); ++j) {
+    const ImageCounts& c = d.image_counts[j];
+    const double e = j < d.light_intensities.size() ? d.light_intensities[j].mean() : 1.0;
+    m.mean.push_back(c.pixels > 0 ? c.linear_sum / c.pixels : 0.0);
+    m.brightness.push_back(e > 0 ? m.mean.back() / e : 0.0);
+  }
+  return m;
+}
+
+}  // namespace
+
+std::string DescribeIntensityFile(const Dataset& d) {
+  char line[600];
+  // The whole image follows Lambert's law as a pixel does: its mean over its light's intensity is
+  // m_j / E_j ≈ b·L_j, b the mask's mean of albedo × normal (attached shadows aside). On the
+  // shared captures with intensity files (DiLiGenT) that fit misses by 0.02–0.09 of the mean
+  // brightness with the file and by 0.42–0.52 without it (E = 1); the same file shuffled misses
+  // by 0.56–0.75 and inverted by 0.92–0.99. A file that fits worse than none does not belong to
+  // the images, in this order. Point lights shine at each pixel from its own direction: not asked.
+  if (!d.files.intensities_from_file || d.files.near.present() || d.image_counts.size() < 6 ||
+      d.light_directions.size() != d.image_counts.size() ||
+      d.light_intensities.size() != d.image_counts.size()) {
+    return "";
+  }
+  const MaskMeans means = MeansInsideMask(d);
+  const int k = static_cast<int>(d.image_counts.size());
+  Eigen::MatrixX3d l(k, 3);
+  const Eigen::VectorXd with_file = Eigen::Map<const Eigen::VectorXd>(means.brightness.data(), k);
+  const Eigen::VectorXd without = Eigen::Map<const Eigen::VectorXd>(means.mean.data(), k);
+  bool usable = true;
+  for (int j = 0; j < k; ++j) {
+    usable = usable && d.image_counts[j].pixels > 0;
+    l.row(j) = d.light_directions[j].transpose();
+  }
+  if (!usable) return "";
+  const auto misfit = [&](const Eigen::VectorXd& y) {
+    const Eigen::Vector3d b = l.colPivHouseholderQr().solve(y);
+    const double scale = y.mean();
+    return scale > 0 ? std::sqrt((y - l * b).squaredNorm() / k) / scale : 0.0;
+  };
+  const double file_misfit = misfit(with_file), plain_misfit = misfit(without);
+  if (file_misfit > plain_misfit && file_misfit > kIntensityMisfitFloor) {
+    std::snprintf(line, sizeof line,
+                  "%s: the images' brightness follows their lights' directions worse with "
+                  "these intensities than with none (misfit %.2f against %.2f of the mean): "
+                  "are they in another order than the images, another capture's, or "
+                  "inverted (exposure factors)?",
+                  d.files.intensities_source.c_str(), file_misfit, plain_misfit);
+    return line;
+  }
+  if (file_misfit > kIntensityOrderFloor) {
+    // A file read a line off fits better than none (the intensities vary smoothly over the
+    // dome) yet moves the normals 6-10 deg on DiLiGenT. The file's own re-readings (shifted
+    // by s lines, reversed) are the likelier orders; the images were taken in one of them, so
+    // the reading that fits best is the one to name when it beats the file as listed.
+    Eigen::VectorXd intensity(k);
+    for (int j = 0; j < k; ++j) intensity(j) = d.light_intensities[j].mean();
+    double best = file_misfit;
+    int best_shift = 0;
+    bool best_reversed = false;
+    for (const bool reversed : {false, true}) {
+      for (int s = 0; s < k; ++s) {
+        if (s == 0 && !reversed) continue;
+        Eigen::VectorXd y(k);
+        for (int j = 0; j < k; ++j) {
+          const int line_index = reversed ? (k - 1 - j + s) % k : (j + s) % k;
+          y(j) = intensity(line_index) > 0 ? without(j) / intensity(line_index) : 0.0;
+        }
+        const double m = misfit(y);
+        if (m < best) best = m, best_shift = s, best_reversed = reversed;
+      }
+    }
+    if (best * kIntensityOrderMargin < file_misfit) {
+      char reading[120];
+      const int shift = best_shift > k / 2 ? best_shift - k : best_shift;
+      if (best_reversed) {
+        std::snprintf(reading, sizeof reading, "in reverse order (image 1 on line %d)",
+                      (k - 1 + best_shift) % k + 1);
+      } else {
+        std::snprintf(reading, sizeof reading, "%d line%s %s (image 1 on line %d)", std::abs(shift),
+                      std::abs(shift) == 1 ? "" : "s", shift > 0 ? "further down" : "further up",
+                      best_shift + 1);
+      }
+      std::snprintf(line, sizeof line,
+                    "%s: the images' brightness follows their lights' directions better with "
+                    "these intensities read %s than as listed (misfit %.3f against %.3f of the "
+                    "mean): is the file a line off from the images (a header line, a light "
+                    "missing at the top, images numbered from 0 and lights from 1)?",
+                    d.files.intensities_source.c_str(), reading, best, file_misfit);
+      return line;
+    }
+  }
+  return "";
+}
+
 std::string DescribeImageCounts(const Dataset& d) {
   std::size_t worst_saturated = 0, worst_black = 0, clipped_images = 0, black_images = 0;
   double saturated_fraction = 0, black_fraction = 0;
@@ -389,14 +492,7 @@ std::string DescribeImageCounts(const Dataset& d) {
   // times the albedo: on every shared capture (DiLiGenT, UW with its chrome sphere, the rendered
   // bunny) the brightest image is within 1.41 times the median's. A hundred times is no shading:
   // a photo at another exposure, or stored in other units (0–255 among 0–1).
-  // Each image's mean inside the mask, and the same over its light's intensity.
-  std::vector<double> mean, brightness;
-  for (std::size_t j = 0; j < d.image_counts.size(); ++j) {
-    const ImageCounts& c = d.image_counts[j];
-    const double e = j < d.light_intensities.size() ? d.light_intensities[j].mean() : 1.0;
-    mean.push_back(c.pixels > 0 ? c.linear_sum / c.pixels : 0.0);
-    brightness.push_back(e > 0 ? mean.back() / e : 0.0);
-  }
+  const std::vector<double> brightness = MeansInsideMask(d).brightness;
   if (!brightness.empty()) {
     std::vector<double> sorted = brightness;
     std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
@@ -427,81 +523,8 @@ std::string DescribeImageCounts(const Dataset& d) {
       text += (text.empty() ? "" : "; ") + std::string(line);
     }
   }
-  // The whole image follows Lambert's law as a pixel does: its mean over its light's intensity is
-  // m_j / E_j ≈ b·L_j, b the mask's mean of albedo × normal (attached shadows aside). On the
-  // shared captures with intensity files (DiLiGenT) that fit misses by 0.02–0.09 of the mean
-  // brightness with the file and by 0.42–0.52 without it (E = 1); the same file shuffled misses
-  // by 0.56–0.75 and inverted by 0.92–0.99. A file that fits worse than none does not belong to
-  // the images, in this order. Point lights shine at each pixel from its own direction: not asked.
-  if (d.files.intensities_from_file && !d.files.near.present() && d.image_counts.size() >= 6 &&
-      d.light_directions.size() == d.image_counts.size() &&
-      d.light_intensities.size() == d.image_counts.size()) {
-    const int k = static_cast<int>(d.image_counts.size());
-    Eigen::MatrixX3d l(k, 3);
-    const Eigen::VectorXd with_file = Eigen::Map<const Eigen::VectorXd>(brightness.data(), k);
-    const Eigen::VectorXd without = Eigen::Map<const Eigen::VectorXd>(mean.data(), k);
-    bool usable = true;
-    for (int j = 0; j < k; ++j) {
-      usable = usable && d.image_counts[j].pixels > 0;
-      l.row(j) = d.light_directions[j].transpose();
-    }
-    const auto misfit = [&](const Eigen::VectorXd& y) {
-      const Eigen::Vector3d b = l.colPivHouseholderQr().solve(y);
-      const double scale = y.mean();
-      return scale > 0 ? std::sqrt((y - l * b).squaredNorm() / k) / scale : 0.0;
-    };
-    const double file_misfit = usable ? misfit(with_file) : 0.0;
-    const double plain_misfit = usable ? misfit(without) : 0.0;
-    if (usable && file_misfit > plain_misfit && file_misfit > kIntensityMisfitFloor) {
-      std::snprintf(line, sizeof line,
-                    "%s: the images' brightness follows their lights' directions worse with "
-                    "these intensities than with none (misfit %.2f against %.2f of the mean): "
-                    "are they in another order than the images, another capture's, or "
-                    "inverted (exposure factors)?",
-                    d.files.intensities_source.c_str(), file_misfit, plain_misfit);
-      text += (text.empty() ? "" : "; ") + std::string(line);
-    } else if (usable && file_misfit > kIntensityOrderFloor) {
-      // A file read a line off fits better than none (the intensities vary smoothly over the
-      // dome) yet moves the normals 6-10 deg on DiLiGenT. The file's own re-readings (shifted
-      // by s lines, reversed) are the likelier orders; the images were taken in one of them, so
-      // the reading that fits best is the one to name when it beats the file as listed.
-      Eigen::VectorXd intensity(k);
-      for (int j = 0; j < k; ++j) intensity(j) = d.light_intensities[j].mean();
-      double best = file_misfit;
-      int best_shift = 0;
-      bool best_reversed = false;
-      for (const bool reversed : {false, true}) {
-        for (int s = 0; s < k; ++s) {
-          if (s == 0 && !reversed) continue;
-          Eigen::VectorXd y(k);
-          for (int j = 0; j < k; ++j) {
-            const int line_index = reversed ? (k - 1 - j + s) % k : (j + s) % k;
-            y(j) = intensity(line_index) > 0 ? without(j) / intensity(line_index) : 0.0;
-          }
-          const double m = misfit(y);
-          if (m < best) best = m, best_shift = s, best_reversed = reversed;
-        }
-      }
-      if (best * kIntensityOrderMargin < file_misfit) {
-        char reading[120];
-        const int shift = best_shift > k / 2 ? best_shift - k : best_shift;
-        if (best_reversed) {
-          std::snprintf(reading, sizeof reading, "in reverse order (image 1 on line %d)",
-                        (k - 1 + best_shift) % k + 1);
-        } else {
-          std::snprintf(reading, sizeof reading, "%d line%s %s (image 1 on line %d)",
-                        std::abs(shift), std::abs(shift) == 1 ? "" : "s",
-                        shift > 0 ? "further down" : "further up", best_shift + 1);
-        }
-        std::snprintf(line, sizeof line,
-                      "%s: the images' brightness follows their lights' directions better with "
-                      "these intensities read %s than as listed (misfit %.3f against %.3f of the "
-                      "mean): is the file a line off from the images (a header line, a light "
-                      "missing at the top, images numbered from 0 and lights from 1)?",
-                      d.files.intensities_source.c_str(), reading, best, file_misfit);
-        text += (text.empty() ? "" : "; ") + std::string(line);
-      }
-    }
+  if (std::string file = DescribeIntensityFile(d); !file.empty()) {
+    text += (text.empty() ? "" : "; ") + file;
   }
   // Images identical inside the mask: the first of each group and how many repeat it.
   std::size_t repeats = 0, groups = 0, first_a = 0, first_b = 0;

@@ -85,6 +85,12 @@ std::string DescribeDataset(const Dataset& dataset, const std::string& ground_tr
 // (distant lights), and on images identical inside the mask (one photo under
 // two names, or all of them: `normals` then refuses in its plan).
 std::string DescribeImageCounts(const Dataset& dataset);
+// "" or, for intensities read from a file under distant lights, why the images contradict it:
+// each image's mean inside the mask over its light's intensity fits b·L_j (Lambert's law for
+// the whole mask) worse than with no file, or better with the file read in another order (shifted
+// by whole lines, reversed). Part of DescribeImageCounts; `normals --estimate-intensities` asks
+// it to decide whether the file is the one to trust.
+std::string DescribeIntensityFile(const Dataset& dataset);
 // "" or, when every image is black (0) at every pixel inside the mask (and there is one), why
 // nothing can be recovered: `normals` refuses such a capture (a mask marking the background).
 std::string AllMaskedBlack(const Dataset& dataset);

@@ -262,14 +262,18 @@ def test_normals_estimate_intensities_ignores_the_intensity_file(tmp_path):
     assert against["file"].endswith("light_intensities.txt")
     assert against["normals_moved_deg"] < 1 and "differ from this file" not in err
     assert "the estimated intensities differ from this file's by" in stdout
-    # A file off by 30 % on every other light: the estimate disagrees and the user hears it. The
-    # figure bounds how much worse either run can be than the other (a triangle inequality).
+    # A file off by 30 % on every other light: the estimate disagrees, and the images contradict
+    # the file (their brightness follows the lights worse with it than with none), so the
+    # estimate is used and the user hears why. The figure bounds how much worse either run can be
+    # than the other (a triangle inequality).
     (dataset / "light_intensities.txt").write_text("0.7 0.7 0.7\n1.3 1.3 1.3\n" * 6)
     code, stdout, err = run("normals", dataset, "--estimate-intensities", "-o", tmp_path / "off")
     assert code == 0, err
+    assert "light_intensities.txt: the images' brightness follows their lights' directions" in err
     assert re.search(r"light_intensities\.txt: the estimated intensities differ from this file's "
                      r"by [0-9.]+% \(median; at most [0-9.]+%\), and the normals under the two "
-                     r"by [0-9.]+ deg on average: one of them is off", err), err
+                     r"by [0-9.]+ deg on average: the images contradict the file \(said above\), "
+                     r"so the estimate is used", err), err
     off = json.loads((tmp_path / "off" / "metrics.json").read_text())
     against = off["estimated_intensities"]["against_file"]
     assert against["median_relative_difference"] > 0.25 and against["normals_moved_deg"] > 1
@@ -296,17 +300,29 @@ def test_the_figure_said_bounds_the_two_runs_difference(tmp_path):
     foil under its file, Lambert under the estimate, which reads the renderer's darkening toward
     the terminator as intensity); one plan for both runs said 0.96 deg where the runs' errors are
     0.95 and 4.10 deg, and gave no warning."""
-    code, _, err = run("normals", BUNNY, "--estimate-intensities", "-o", tmp_path / "est",
+    # Past a degree apart, the images not contradicting the file: refused, nothing written.
+    code, _, err = run("normals", BUNNY, "--estimate-intensities", "-o", tmp_path / "refused",
                        timeout=300)
-    assert code == 0, err
+    assert code == 1, err
+    found = re.search(r"iphong: error: \S*light_intensities\.txt: the estimated intensities "
+                      r"differ from this file's by [0-9.]+% \(median; at most [0-9.]+%\), and the "
+                      r"normals under the two by ([0-9.]+) deg on average: the images cannot tell "
+                      r"which set is right.*nothing written.*--intensities none", err)
+    assert found, err
+    assert not (tmp_path / "refused").exists()
+    moved = float(found.group(1))
+    # The estimate unchecked, as the error offers, and the file's run.
+    code, _, est_err = run("normals", BUNNY, "--estimate-intensities", "--intensities", "none",
+                           "-o", tmp_path / "est", timeout=300)
+    assert code == 0, est_err
+    assert "with no intensity file to check the estimate against" in est_err
     code, _, file_err = run("normals", BUNNY, "-o", tmp_path / "file", timeout=300)
     assert code == 0, file_err
     est = json.loads((tmp_path / "est" / "metrics.json").read_text())
     given = json.loads((tmp_path / "file" / "metrics.json").read_text())
-    moved = est["estimated_intensities"]["against_file"]["normals_moved_deg"]
+    assert est["input"]["intensities"] == "all 1 (--intensities none)"
     apart = abs(est["mean_angular_error_deg"] - given["mean_angular_error_deg"])
     assert moved >= apart > 2, (moved, apart)
-    assert "normals under the two by" in err and "one of them is off" in err, err
 
 
 @pytest.mark.parametrize("args, code, pattern", [

@@ -66,3 +66,18 @@ def test_load_dataset_capture_options():
         iphong.load_dataset(GRAY, encoding="gamma")
     with pytest.raises(TypeError, match="crop"):
         iphong.load_dataset(GRAY, crop="0,0,10,10")
+
+
+CROP_BALL = DATA / "diligent-crop8" / "ball"
+
+
+@pytest.mark.skipif(not CROP_BALL.is_dir(), reason=f"DiLiGenT crops not found at {CROP_BALL}")
+def test_intensities_none_sets_the_capture_file_aside():
+    """intensities="none" reads every light as 1 although the folder holds light_intensities.txt
+    (DiLiGenT's range from 0.38 to 2.3), without touching the folder."""
+    with_file = iphong.load_dataset(CROP_BALL)
+    assert with_file["light_intensities"].max() > 2 * with_file["light_intensities"].min()
+    none = iphong.load_dataset(CROP_BALL, intensities="none")
+    np.testing.assert_array_equal(none["light_intensities"], np.ones((96, 3)))
+    assert "intensities all 1 (--intensities none)" in none["description"]
+    np.testing.assert_array_equal(none["images"], with_file["images"])
