@@ -188,78 +188,10 @@ void RunNormals(const NormalsCommandOptions& o) {
   options.progress = [fit_progress](double fraction) { fit_progress->Update(fraction); };
 
   const double load_seconds = SecondsSince(total_start);
-  std::optional<calibrate::IntensityEstimate> estimated;
-  nlohmann::json estimated_vs_file;
+  std::optional<EstimatedIntensities> estimated;
   if (o.estimate_intensities) {
-    calibrate::IntensityOptions intensity_options;
-    intensity_options.threads = o.common.threads;
-    try {
-      estimated = calibrate::EstimateIntensities(loaded.observations, intensity_options);
-    } catch (const std::invalid_argument& e) {
-      throw std::runtime_error(o.dataset + ": --estimate-intensities: " + e.what());
-    }
-    Say(o.common, "Estimated the %d lights' intensities in %.2f s (eigenvalue gap %.1f%s)\n",
-        loaded.observations.images, estimated->seconds, estimated->eigen_gap,
-        estimated->code_offset > 0 ? "; integer codes taken as truncated" : "");
-    // Intensities from a file too (calibrated ones, usually): how far the estimate moves the
-    // normals from theirs, said, and a warning past a degree.
-    const std::string& source = dataset.files.intensities_source;
-    if (loaded.observations.images >= 3 && dataset.files.intensities_from_file) {
-      // Each run as this command makes it (the effective distance, and with it the foil's refit),
-      // so the figure compares the normals it would write; quiet, the two runs' lines unsaid.
-      std::function<solve::NormalResult(const solve::PhotometricData&)> whole_run;
-      if (!dataset.files.near.present()) {
-        whole_run = [&](const solve::PhotometricData& under) {
-          near::EffectiveDistanceOptions e =
-              EffectiveDistanceOptionsFor(o, NormalOptionsFor(o, dataset));
-          e.log = nullptr;
-          return near::SolveEffectiveDistance(under, e).normals;
-        };
-      }
-      const calibrate::IntensityComparison c = calibrate::CompareIntensities(
-          loaded.observations, loaded.observations.light_intensities, estimated->light_intensities,
-          NormalOptionsFor(o, dataset), whole_run);
-      estimated_vs_file = {{"file", source},
-                           {"median_relative_difference", c.median_relative},
-                           {"max_relative_difference", c.max_relative},
-                           {"normals_moved_deg", c.normals_moved_deg},
-                           {"seconds", c.seconds}};
-      char text[400];
-      std::snprintf(text, sizeof text,
-                    "%s: the estimated intensities differ from this file's by %.1f%% (median; at "
-                    "most %.1f%%), and the normals under the two by %.2f deg on average",
-                    source.c_str(), 100 * c.median_relative, 100 * c.max_relative,
-                    c.normals_moved_deg);
-      // Past a degree the images cannot say which set is right (the estimate reads what
-      // Lambert's law explains in them, cast shadows, interreflections and fall-off included),
-      // and a file measured on a target is usually the better: refused, unless the images
-      // contradict the file itself (another order, another capture's), where the estimate is
-      // the one left standing.
-      const std::string contradicted = io::DescribeIntensityFile(dataset);
-      if (c.normals_moved_deg > 1 && contradicted.empty()) {
-        throw std::runtime_error(
-            std::string(text) +
-            ": the images cannot tell which set is right, and intensities measured on a target "
-            "are usually the better ones; nothing written. Run without --estimate-intensities "
-            "to use the file's, or add --intensities none to use the estimate unchecked");
-      } else if (c.normals_moved_deg > 1) {
-        Warn(std::string(text) +
-             ": the images contradict the file (said above), so the estimate is used; check the "
-             "file against the images' order");
-      } else {
-        Say(o.common, "%s (compared in %.1f s)\n", text, c.seconds);
-      }
-    } else {
-      // Nothing to check the estimate against, and no figure of the photos bounds its error: a
-      // factor that varies smoothly with the light's direction (a fall-off or reflectance Lambert
-      // does not model) is explained as well by intensities as by normals, so the user hears it.
-      Warn(o.dataset +
-           ": --estimate-intensities with no intensity file to check the estimate against: " +
-           calibrate::kUncheckedEstimateNote +
-           "; calibrate the lights (iphong calibrate-lights on a matte sphere) where a degree "
-           "matters");
-    }
-    loaded.observations.light_intensities = estimated->light_intensities;
+    estimated = EstimateCheckedIntensities(o, dataset, loaded.observations);
+    loaded.observations.light_intensities = estimated->estimate.light_intensities;
   }
   const solve::PhotometricData& data = loaded.observations;  // masked pixels only
   const nlohmann::json encoding_check = CheckEncoding(o, dataset, data, options);
@@ -343,14 +275,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   if (!ambiguity.pixels.empty()) {
     metrics["solver"] = "global (one or two images): data + smoothness + integrability + boundary";
   }
-  if (estimated) {
-    metrics["estimated_intensities"] = {{"seconds", estimated->seconds},
-                                        {"eigen_gap", estimated->eigen_gap},
-                                        {"lambert_residual", estimated->lambert_residual}};
-    if (!estimated_vs_file.is_null()) {
-      metrics["estimated_intensities"]["against_file"] = estimated_vs_file;
-    }
-  }
+  if (estimated) metrics["estimated_intensities"] = estimated->metrics;
   if (frame) metrics["frame_check"] = FrameCheckJson(*frame);
   if (!encoding_check.is_null()) metrics["encoding_check"] = encoding_check;
   metrics["dark_pixels"] = result.summary.dark_pixels;
@@ -393,7 +318,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   }
   if (estimated) {
     io::WriteTextFile(out.file("light_intensities.txt"),
-                      io::FormatTriples(estimated->light_intensities));
+                      io::FormatTriples(estimated->estimate.light_intensities));
   }
   if (errors)
     io::WriteErrorMap(

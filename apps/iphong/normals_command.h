@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "calibrate/lights.h"
 #include "integrate/frame_check.h"
 #include "io/capture_bands.h"
 #include "io/output_folder.h"
@@ -84,6 +85,20 @@ nlohmann::json FrameCheckJson(const integrate::FrameCheckResult& r);
 nlohmann::json CheckEncoding(const NormalsCommandOptions& o, const io::Dataset& dataset,
                              const solve::PhotometricData& data,
                              const solve::NormalOptions& options);
+
+// --estimate-intensities (normals_intensities.cc): the estimate, checked against the capture's
+// intensity file or, with none, against equal lights. Refuses (std::runtime_error, nothing
+// written) where the two put the normals more than a degree apart and the images cannot say the
+// estimate is right: beside a file the images do not contradict, or within the estimate's own
+// error of equal lights (unless --intensities none asked for it unchecked); warns otherwise.
+// `metrics` is metrics.json's "estimated_intensities".
+struct EstimatedIntensities {
+  calibrate::IntensityEstimate estimate;
+  nlohmann::json metrics;
+};
+EstimatedIntensities EstimateCheckedIntensities(const NormalsCommandOptions& o,
+                                                const io::Dataset& dataset,
+                                                const solve::PhotometricData& observations);
 
 // The solver's options from the command's flags and the capture's material.json.
 solve::NormalOptions NormalOptionsFor(const NormalsCommandOptions& o, const io::Dataset& d);

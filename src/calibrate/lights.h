@@ -227,6 +227,11 @@ struct IntensityEstimate {
 IntensityEstimate EstimateIntensities(const solve::PhotometricData& data,
                                       const IntensityOptions& options);
 
+// The estimate's largest error per light and channel where calibrated intensities were known
+// (each channel's mean 1): 6.5-7.9 % on DiLiGenT ball and cat and their crops, 3.3 % on a
+// rendered bunny. An estimate within this of equal lights does not show that they differ.
+inline constexpr double kEstimateLargestError = 0.08;
+
 // What an accepted estimate is worth, measured where calibrated intensities were known
 // (docs/guides/calibrating-lights.md): said wherever an estimate is made with none to compare
 // against (the command line's warning, the Python docstring).

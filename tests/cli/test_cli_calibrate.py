@@ -288,8 +288,13 @@ def test_an_estimate_with_nothing_to_check_it_against_is_warned(tmp_path):
     assert code == 0, err
     assert re.search(r"iphong: warning: .*sphere: --estimate-intensities with no intensity file to "
                      r"check the estimate against: .* calibrate the lights", err), err
-    assert "against_file" not in json.loads((tmp_path / "out" / "metrics.json").read_text())[
+    estimated = json.loads((tmp_path / "out" / "metrics.json").read_text())[
         "estimated_intensities"]
+    assert "against_file" not in estimated
+    # Rendered with equal lights, the estimate lies within its own error of equal (3 %), so the
+    # run under equal lights is the check: within a degree here, so the estimate is used.
+    assert estimated["against_equal"]["max_relative_difference"] < 0.04
+    assert estimated["against_equal"]["normals_moved_deg"] < 1
 
 
 @pytest.mark.skipif(not BUNNY.is_dir(), reason=f"rps-bunny-lambert not found at {BUNNY}")
@@ -323,6 +328,31 @@ def test_the_figure_said_bounds_the_two_runs_difference(tmp_path):
     assert est["input"]["intensities"] == "all 1 (--intensities none)"
     apart = abs(est["mean_angular_error_deg"] - given["mean_angular_error_deg"])
     assert moved >= apart > 2, (moved, apart)
+
+
+@pytest.mark.skipif(not BUNNY.is_dir(), reason=f"rps-bunny-lambert not found at {BUNNY}")
+def test_an_estimate_within_its_error_of_equal_lights_that_moves_the_normals_is_refused(
+        tmp_path):
+    """The bunny without its intensity file: the lights are alike (the estimate within 3.3 % of
+    equal, less than its error on calibrated captures), yet the estimate moves the normals 3.7
+    degrees from a run under equal lights, which are the right ones: refused, nothing written;
+    --intensities none still takes the estimate unchecked."""
+    folder = tmp_path / "bunny"
+    folder.mkdir()
+    for path in BUNNY.iterdir():
+        if path.name != "light_intensities.txt":
+            (folder / path.name).symlink_to(path)
+    code, _, err = run("normals", folder, "--estimate-intensities", "-o", tmp_path / "refused",
+                       timeout=300)
+    assert code == 1, err
+    assert re.search(r"iphong: error: \S*bunny: --estimate-intensities: the estimated intensities "
+                     r"are all within [0-3]\.[0-9]% of equal lights, .* move the normals "
+                     r"[1-9][0-9.]* deg from equal intensities'.*nothing written", err), err
+    assert not (tmp_path / "refused").exists()
+    code, _, err = run("normals", folder, "--estimate-intensities", "--intensities", "none",
+                       "-o", tmp_path / "unchecked", timeout=300)
+    assert code == 0, err
+    assert "with no intensity file to check the estimate against" in err
 
 
 @pytest.mark.parametrize("args, code, pattern", [
