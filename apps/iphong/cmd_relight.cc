@@ -169,7 +169,16 @@ void AddRelightCommand(CLI::App& app) {
                   "Light direction lx,ly,lz (camera frame, toward the light; repeat for more)")
       ->required()
       ->delimiter(',')
-      ->allow_extra_args(false);
+      ->allow_extra_args(false)
+      // Each comma-separated piece, before conversion: "0 0 1" gets the flag's own hint.
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            double v = 0;
+            if (CLI::detail::lexical_cast(text, v)) return "";
+            return "takes lx,ly,lz, numbers separated by commas (got '" + text +
+                   "'; repeat the flag for more lights)";
+          },
+          "NUMBER"));
   cmd->add_option("--intensity", o->intensity, "Light intensity: one number or r,g,b")
       ->delimiter(',')
       ->capture_default_str();

@@ -134,6 +134,9 @@ def test_bad_inputs(capture, tmp_path):
     assert_refused(tmp_path, ["relight", tmp_path / "empty", "--light", "0,0,1", "-o", out], 1,
                    r"normals.exr: no such file")
     assert_refused(tmp_path, ["relight", n, "--light", "0,0,0", "-o", out], 2, r"--light")
+    # Spaces for commas: the flag's own hint, not CLI11's "Could not convert".
+    assert_refused(tmp_path, ["relight", n, "--light", "0 0 1", "-o", out], 2,
+                   r"--light: takes lx,ly,lz, numbers separated by commas \(got '0 0 1'")
     assert_refused(tmp_path, ["relight", n, "--light", "0,0,1", "-o", tmp_path / "x.jpg"], 2,
                    r"\.png .*or \.exr")
     assert_refused(tmp_path, ["relight", n, "--light", "0,0,1", "--viewer", "-o", out], 2,
