@@ -5,6 +5,7 @@
 // `iphong render --per-light` holds every image at once: 64 Mpx x 32 lights would be 24 GB.
 //
 //   make_capture OUT_DIR SIDE_PX LIGHTS
+#include <unistd.h>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -63,6 +64,7 @@ int main(int argc, char** argv) {
     mask.Finish();
   }
   std::ofstream names(out / "filenames.txt"), directions(out / "light_directions.txt");
+  const bool on_terminal = isatty(fileno(stderr)) != 0;
   for (int j = 0; j < k; ++j) {
     char name[32];
     std::snprintf(name, sizeof name, "%03d.png", j + 1);
@@ -86,8 +88,13 @@ int main(int argc, char** argv) {
       image.WriteRows(rgb);
     }
     image.Finish();
-    std::fprintf(stderr, "\r%d/%d images", j + 1, k);
+    // On a terminal one line rewritten; in a log a line every tenth of the images.
+    if (on_terminal) {
+      std::fprintf(stderr, "\r%d/%d images", j + 1, k);
+    } else if ((j + 1) * 10 / k != j * 10 / k || j + 1 == k) {
+      std::fprintf(stderr, "%d/%d images\n", j + 1, k);
+    }
   }
-  std::fprintf(stderr, "\n");
+  if (on_terminal) std::fprintf(stderr, "\n");
   return names && directions ? 0 : 1;
 }
