@@ -356,6 +356,23 @@ MaskMeans MeansInsideMask(const Dataset& d) {
   return m;
 }
 
+// A mask holding at least 95 % of the image's border pixels and leaving some pixels out: the
+// background marked and the object left out, the usual way a mask is drawn the wrong way round
+// (a photographed object rarely fills the frame to every edge around a hole).
+bool MaskKeepsBorderAround(const Mask& m) {
+  if (m.width < 3 || m.height < 3) return false;
+  std::size_t border = 0, kept = 0;
+  for (int x = 0; x < m.width; ++x) {
+    kept += m.at(x, 0) + m.at(x, m.height - 1);
+    border += 2;
+  }
+  for (int y = 1; y + 1 < m.height; ++y) {
+    kept += m.at(0, y) + m.at(m.width - 1, y);
+    border += 2;
+  }
+  return kept >= 0.95 * border && m.count() < m.inside.size();
+}
+
 }  // namespace
 
 std::string DescribeIntensityFile(const Dataset& d) {
@@ -486,7 +503,13 @@ std::string DescribeImageCounts(const Dataset& d) {
                   black_images, d.image_counts.size(), d.filenames[worst_black].c_str(),
                   100 * black_fraction);
     text += (text.empty() ? "" : "; ") + std::string(line);
-    if (d.files.mask_path.empty()) text += " (there is no mask: the background counts; --mask)";
+    if (d.files.mask_path.empty()) {
+      text += " (there is no mask: the background counts; --mask)";
+    } else if (MaskKeepsBorderAround(d.mask)) {
+      text +=
+          " (the mask keeps the image's border and leaves out a region inside it: drawn the "
+          "wrong way round? Nonzero marks the object)";
+    }
   }
   // Each image's mean inside the mask over its light's intensity is its light's mean shading
   // times the albedo: on every shared capture (DiLiGenT, UW with its chrome sphere, the rendered

@@ -282,6 +282,40 @@ TEST(ImageCounts, ImagesBrightBeyondAnyShadingOrNegativeAreNamed) {
             "subtracted twice, or an offset? Light only adds; these values are read as dark");
 }
 
+// Images black on much of the mask are named; when the mask keeps the image's border and leaves
+// a region inside out, the likely cause (a mask drawn the wrong way round) is said too.
+TEST(ImageCounts, BlackImagesNameAMaskDrawnTheWrongWayRound) {
+  Dataset d;
+  for (int j = 0; j < 4; ++j) {
+    ImageCounts c;
+    c.pixels = 84;
+    c.black = j < 2 ? 60 : 0;
+    c.linear_sum = 10;
+    c.masked_hash = j;
+    d.image_counts.push_back(c);
+    d.filenames.push_back("img" + std::to_string(j) + ".png");
+    d.light_intensities.push_back(Vec3d::Ones());
+  }
+  d.files.mask_path = "mask.png";
+  d.mask = Mask(10, 10, true);  // the border kept, a 4 x 4 region inside left out
+  for (int y = 3; y < 7; ++y)
+    for (int x = 3; x < 7; ++x) d.mask.inside[y * 10 + x] = 0;
+  const std::string black =
+      "2 of 4 images are black (0) on more than 10% of the mask (most: img0.png, 71.4%): "
+      "under-exposed, or lights the object does not face";
+  EXPECT_EQ(DescribeImageCounts(d),
+            black +
+                " (the mask keeps the image's border and leaves out a region inside it: drawn "
+                "the wrong way round? Nonzero marks the object)");
+  d.mask = Mask(10, 10, false);  // the object inside, the border left out: no hint
+  for (int y = 3; y < 7; ++y)
+    for (int x = 3; x < 7; ++x) d.mask.inside[y * 10 + x] = 1;
+  EXPECT_EQ(DescribeImageCounts(d), black);
+  d.files.mask_path.clear();
+  d.mask = Mask(10, 10, true);
+  EXPECT_EQ(DescribeImageCounts(d), black + " (there is no mask: the background counts; --mask)");
+}
+
 // An intensity file the images' brightness contradicts is named: each image's mean follows
 // b·L_j × E_j (Lambert's law for the whole mask); the right file is silent, the same file in
 // another order or inverted is not, and a file of equal intensities says nothing either way.
