@@ -90,7 +90,8 @@ void RequireFolder(const std::string& path);
 void AddDemoCommand(CLI::App& app);
 void AddMaterialsCommand(CLI::App& app);
 void AddRenderCommand(CLI::App& app);
-void AddNormalsCommand(CLI::App& app);  // normals and eval
+void AddNormalsCommand(CLI::App& app);
+void AddEvalCommand(CLI::App& app);
 void AddIntegrateCommand(CLI::App& app);
 void AddCalibrateCommand(CLI::App& app);  // calibrate-lights
 void AddFitMaterialCommand(CLI::App& app);
@@ -102,6 +103,7 @@ inline void AddAllCommands(CLI::App& app) {
   AddRenderCommand(app);
   AddCalibrateCommand(app);
   AddNormalsCommand(app);
+  AddEvalCommand(app);
   AddIntegrateCommand(app);
   AddFitMaterialCommand(app);
   AddRelightCommand(app);

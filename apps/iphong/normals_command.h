@@ -13,6 +13,7 @@
 #include "iphong/commands.h"
 #include "near/effective_distance.h"
 #include "near/near.h"
+#include "solve/metrics.h"
 #include "solve/normals.h"
 
 namespace iphong::cli {
@@ -57,6 +58,8 @@ NormalsMemory EstimateNormalsMemory(const io::CaptureBands& capture,
                                     const solve::NormalOptions& options, int threads);
 
 nlohmann::json NormalsInputJson(const io::Dataset& d);
+// The angular-error figures of metrics.json (normals) and of `iphong eval`'s output.
+nlohmann::json AngularErrorJson(const solve::AngularErrorMetrics& m);
 
 // material.json as `iphong normals` writes an estimated material.
 nlohmann::json EstimatedMaterialJson(const solve::NormalResult& result);
