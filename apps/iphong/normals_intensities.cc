@@ -54,7 +54,8 @@ EstimatedIntensities EstimateCheckedIntensities(const NormalsCommandOptions& o,
                           {"seconds", c.seconds}};
   };
 
-  if (observations.images >= 3 && dataset.files.intensities_from_file) {
+  // EstimateIntensities needs 4 images or more, so both runs below are per-pixel solves.
+  if (dataset.files.intensities_from_file) {
     const std::string& source = dataset.files.intensities_source;
     const calibrate::IntensityComparison c = compare(observations.light_intensities);
     out.metrics["against_file"] = figures(c);
@@ -96,8 +97,7 @@ EstimatedIntensities EstimateCheckedIntensities(const NormalsCommandOptions& o,
     departure = std::max(departure, (e.array() - 1).abs().maxCoeff());
   }
   const bool asked_unchecked = o.capture.options.intensities == io::kNoIntensities;
-  if (observations.images >= 3 && !asked_unchecked &&
-      departure < calibrate::kEstimateLargestError) {
+  if (!asked_unchecked && departure < calibrate::kEstimateLargestError) {
     const std::vector<Rgb> equal(estimate.light_intensities.size(), Rgb::Ones());
     const calibrate::IntensityComparison c = compare(equal);
     out.metrics["against_equal"] = figures(c);

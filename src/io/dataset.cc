@@ -399,8 +399,10 @@ std::string DescribeIntensityFile(const Dataset& d) {
     l.row(j) = d.light_directions[j].transpose();
   }
   if (!usable) return "";
+  // One factorization of the lights serves every reading (up to 2K + 1 fits).
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixX3d> lights_qr(l);
   const auto misfit = [&](const Eigen::VectorXd& y) {
-    const Eigen::Vector3d b = l.colPivHouseholderQr().solve(y);
+    const Eigen::Vector3d b = lights_qr.solve(y);
     const double scale = y.mean();
     return scale > 0 ? std::sqrt((y - l * b).squaredNorm() / k) / scale : 0.0;
   };
