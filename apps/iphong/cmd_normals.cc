@@ -110,6 +110,62 @@ std::optional<integrate::FrameCheckResult> CheckLightFrame(const NormalsCommandO
 
 namespace {
 
+// The capture's headers and mask first: when its observations and results would not fit in the
+// memory limit (or --band-rows asks), it is solved in bands of rows instead, with the same result,
+// and true returned.
+bool SolvedInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
+                   Clock::time_point total_start) {
+  io::DatasetLoadOptions load;
+  load.capture = o.capture.resolved();
+  load.threads = o.common.threads;
+  load.memory = o.common.memory();
+  io::CaptureBands capture(o.dataset, load);
+  NormalsMemory memory =
+      EstimateNormalsMemory(capture, NormalOptionsFor(o, capture.dataset()), o.common.threads);
+  // The effective light distance's whole-field part (the surface, two passes' results), in
+  // memory as in bands; with --light-distance inf too, for the foil's refit at D = ∞.
+  const bool sought =
+      capture.dataset().filenames.size() >= 3 && !capture.dataset().files.near.present();
+  if (sought) {
+    memory.field_bytes =
+        static_cast<double>(capture.dataset().mask.count()) * near::kEffectiveDistanceBytesPerPixel;
+    memory.whole_bytes += memory.field_bytes;
+  }
+  const double limit = static_cast<double>(load.memory.resolved());
+  if ((memory.whole_bytes > limit || o.band_rows > 0) && capture.dataset().files.near.present()) {
+    throw ResourceError(o.dataset +
+                        ": a near-light capture is solved whole (its surface "
+                        "places every pixel's lights): it needs " +
+                        FormatBytes(memory.whole_bytes) + ", more than the memory limit of " +
+                        FormatBytes(limit) + (o.band_rows > 0 ? " (--band-rows)" : ""));
+  }
+  if (memory.whole_bytes > limit || o.band_rows > 0) {
+    // In bands the whole-field part sits beside the bands, when it leaves room for a row.
+    NormalsMemory banded = memory;
+    bool field = sought;
+    if (field) {
+      banded.fixed_bytes += banded.field_bytes;
+      if (banded.BandRows(limit, capture.height()) < 1 &&
+          memory.BandRows(limit, capture.height()) >= 1) {
+        field = false;
+        banded.fixed_bytes = memory.fixed_bytes;
+      }
+    }
+    const int rows = o.band_rows > 0 ? std::min(o.band_rows, capture.height())
+                                     : banded.BandRows(limit, capture.height());
+    if (rows < 1) {
+      throw ResourceError(o.dataset + ": one row of " + SizeText(capture.width(), 1) + " x " +
+                          std::to_string(capture.dataset().filenames.size()) + " images needs " +
+                          FormatBytes(banded.fixed_bytes + banded.per_row_bytes) +
+                          ", more than the memory limit of " + FormatBytes(limit) +
+                          " (raise it with --memory-limit)");
+    }
+    RunNormalsInBands(o, out, capture, rows, banded, field, SecondsSince(total_start));
+    return true;
+  }
+  return false;
+}
+
 void RunNormals(const NormalsCommandOptions& o) {
   const auto total_start = Clock::now();
   RequireFolder(o.dataset);
@@ -121,58 +177,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   folder.inputs = {o.dataset, o.capture.options.images, o.capture.options.lights,
                    o.capture.options.intensities, o.capture.options.mask};
   io::OutputFolder out(o.output_dir, folder);
-  {
-    // The capture's headers and mask first: when its observations and results would not fit in
-    // the memory limit, it is solved in bands of rows instead, with the same result.
-    io::DatasetLoadOptions load;
-    load.capture = o.capture.resolved();
-    load.threads = o.common.threads;
-    load.memory = o.common.memory();
-    io::CaptureBands capture(o.dataset, load);
-    NormalsMemory memory =
-        EstimateNormalsMemory(capture, NormalOptionsFor(o, capture.dataset()), o.common.threads);
-    // The effective light distance's whole-field part (the surface, two passes' results), in
-    // memory as in bands; with --light-distance inf too, for the foil's refit at D = ∞.
-    const bool sought =
-        capture.dataset().filenames.size() >= 3 && !capture.dataset().files.near.present();
-    if (sought) {
-      memory.field_bytes = static_cast<double>(capture.dataset().mask.count()) *
-                           near::kEffectiveDistanceBytesPerPixel;
-      memory.whole_bytes += memory.field_bytes;
-    }
-    const double limit = static_cast<double>(load.memory.resolved());
-    if ((memory.whole_bytes > limit || o.band_rows > 0) && capture.dataset().files.near.present()) {
-      throw ResourceError(o.dataset +
-                          ": a near-light capture is solved whole (its surface "
-                          "places every pixel's lights): it needs " +
-                          FormatBytes(memory.whole_bytes) + ", more than the memory limit of " +
-                          FormatBytes(limit) + (o.band_rows > 0 ? " (--band-rows)" : ""));
-    }
-    if (memory.whole_bytes > limit || o.band_rows > 0) {
-      // In bands the whole-field part sits beside the bands, when it leaves room for a row.
-      NormalsMemory banded = memory;
-      bool field = sought;
-      if (field) {
-        banded.fixed_bytes += banded.field_bytes;
-        if (banded.BandRows(limit, capture.height()) < 1 &&
-            memory.BandRows(limit, capture.height()) >= 1) {
-          field = false;
-          banded.fixed_bytes = memory.fixed_bytes;
-        }
-      }
-      const int rows = o.band_rows > 0 ? std::min(o.band_rows, capture.height())
-                                       : banded.BandRows(limit, capture.height());
-      if (rows < 1) {
-        throw ResourceError(o.dataset + ": one row of " + SizeText(capture.width(), 1) + " x " +
-                            std::to_string(capture.dataset().filenames.size()) + " images needs " +
-                            FormatBytes(banded.fixed_bytes + banded.per_row_bytes) +
-                            ", more than the memory limit of " + FormatBytes(limit) +
-                            " (raise it with --memory-limit)");
-      }
-      RunNormalsInBands(o, out, capture, rows, banded, field, SecondsSince(total_start));
-      return;
-    }
-  }
+  if (SolvedInBands(o, out, total_start)) return;
   io::ObservationSet loaded = LoadCaptureObservations(o.dataset, o.capture, o.common);
   io::Dataset& dataset = loaded.dataset;
   ReportCapture(o.dataset, dataset, o.common);
@@ -232,52 +237,20 @@ void RunNormals(const NormalsCommandOptions& o) {
   metrics["input"] = NormalsInputJson(dataset);
   metrics["pixels"] = data.pixel_count();
   metrics["images"] = data.images;
-  metrics["model"] = reflectance::LobeName(result.model);
+  std::size_t specular_pixels = 0, chosen_pixels = 0;
+  for (float v : result.model_map.pixels) {
+    specular_pixels += v == 1;
+    chosen_pixels += v >= 0;
+  }
+  metrics.update(SolveMetricsJson(options, result, specular_pixels, chosen_pixels));
   metrics["load_seconds"] = load_seconds;
   metrics["init_seconds"] = result.summary.init_seconds;
-  metrics["model_seconds"] = result.summary.model_seconds;
-  metrics["solve_seconds"] = result.summary.solve_seconds;
-  metrics["iterations"] = result.summary.iterations;
-  if (!result.model_choice.scored.empty()) {
-    nlohmann::json scores = nlohmann::json::array();
-    for (const solve::ModelCandidate& m : result.model_choice.scored) {
-      scores.push_back({{"model", reflectance::LobeName(m.lobe)},
-                        {"shininess", m.shininess},
-                        {"ambient_term", {m.ambient_term[0], m.ambient_term[1], m.ambient_term[2]}},
-                        {"ks_prior_weight", m.ks_prior_weight},
-                        {"code_offset", m.code_offset},
-                        {"heldout_cost", m.heldout_cost},
-                        {"heldout_error", m.heldout_error},
-                        {"fold_angle_deg", m.fold_angle_deg},
-                        {"heldout_pixels", m.heldout_pixels}});
-    }
-    std::size_t specular_pixels = 0, chosen_pixels = 0;
-    for (float v : result.model_map.pixels) {
-      specular_pixels += v == 1;
-      chosen_pixels += v >= 0;
-    }
-    metrics["model_choice"] = {{"chosen", reflectance::LobeName(result.model)},
-                               {"pixels_choosing_it", specular_pixels},
-                               {"pixels_choosing_lambert", chosen_pixels - specular_pixels},
-                               {"shininess", result.shininess},
-                               {"pixels", result.model_choice.pixels},
-                               {"integer_code_step", result.model_choice.code_step},
-                               {"code_offset", result.code_offset},
-                               {"scores", scores}};
-  }
-  if (auto w = ShadingWeightsJson(result.model_choice.shading); !w.is_null()) {
-    metrics["shading_weights"] = w;
-  }
   if (!ambiguity.pixels.empty()) {
     metrics["solver"] = "global (one or two images): data + smoothness + integrability + boundary";
   }
   if (estimated) metrics["estimated_intensities"] = estimated->metrics;
   if (frame) metrics["frame_check"] = FrameCheckJson(*frame);
   if (!encoding_check.is_null()) metrics["encoding_check"] = encoding_check;
-  metrics["dark_pixels"] = result.summary.dark_pixels;
-  metrics["underdetermined_pixels"] = result.summary.underdetermined_pixels;
-  metrics["material"] = MaterialLabel(options, result);
-  if (!result.specular_note.empty()) metrics["specular_note"] = result.specular_note;
   std::optional<solve::AngularErrorMetrics> errors;
   if (!dataset.normal_gt.pixels.empty()) {
     try {
@@ -368,22 +341,7 @@ void RunNormals(const NormalsCommandOptions& o) {
         data.pixel_count(), data.images, reflectance::LobeName(options.model).c_str(), load_seconds,
         result.summary.solve_seconds, result.summary.iterations);
   }
-  if (result.material_estimated) {
-    Say(o.common, "Model %s, shininess %.1f; ks median [%.3f %.3f %.3f] (%s)\n",
-        reflectance::LobeName(result.model).c_str(), result.shininess, result.ks[0], result.ks[1],
-        result.ks[2], result.specular_note.c_str());
-  } else if (!result.specular_note.empty()) {
-    Say(o.common, "%s\n", result.specular_note.c_str());
-  }
-  if (std::string line = ShadingWeightsLine(result.model_choice.shading); !line.empty()) {
-    Say(o.common, "%s\n", line.c_str());
-  }
-  if (result.summary.dark_pixels + result.summary.underdetermined_pixels > 0) {
-    Say(o.common,
-        "%zu pixels dark in every image and %zu with fewer than 3 usable lights: "
-        "flagged -1 in residual.exr\n",
-        result.summary.dark_pixels, result.summary.underdetermined_pixels);
-  }
+  SayModelAndFlags(o.common, result);
   if (near_run) {
     const near::NearResult& r = near_run->result;
     char depth[96] = "";

@@ -255,7 +255,6 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
   metrics["input"] = NormalsInputJson(dataset);
   metrics["pixels"] = result.summary.pixels;
   metrics["images"] = k;
-  metrics["model"] = reflectance::LobeName(result.model);
   if (frame) metrics["frame_check"] = FrameCheckJson(*frame);
   if (!encoding_check.is_null()) metrics["encoding_check"] = encoding_check;
   if (!effective_json.is_null()) metrics["effective_distance"] = effective_json;
@@ -270,23 +269,7 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
       {"effective_distance_bytes", memory.field_bytes},
       {"effective_distance_sought", field && o.light_distance != "inf"}};
   metrics["sample_seconds"] = result.summary.init_seconds;
-  metrics["model_seconds"] = result.summary.model_seconds;
-  metrics["solve_seconds"] = result.summary.solve_seconds;
-  metrics["iterations"] = result.summary.iterations;
-  if (!result.model_choice.scored.empty()) {
-    metrics["model_choice"] = {{"chosen", reflectance::LobeName(result.model)},
-                               {"pixels_choosing_it", specular_pixels},
-                               {"pixels_choosing_lambert", chosen_pixels - specular_pixels},
-                               {"shininess", result.shininess},
-                               {"pixels", result.model_choice.pixels}};
-  }
-  if (auto w = ShadingWeightsJson(result.model_choice.shading); !w.is_null()) {
-    metrics["shading_weights"] = w;
-  }
-  metrics["dark_pixels"] = result.summary.dark_pixels;
-  metrics["underdetermined_pixels"] = result.summary.underdetermined_pixels;
-  metrics["material"] = MaterialLabel(options, result);
-  if (!result.specular_note.empty()) metrics["specular_note"] = result.specular_note;
+  metrics.update(SolveMetricsJson(options, result, specular_pixels, chosen_pixels));
   if (!dataset.files.ground_truth_path.empty()) {
     metrics["ground_truth_note"] = kBandsGroundTruthNote;
   }
@@ -304,20 +287,7 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
       result.summary.pixels, k, (height + band_rows - 1) / band_rows, band_rows,
       reflectance::LobeName(result.model).c_str(), result.summary.init_seconds,
       result.summary.model_seconds, result.summary.solve_seconds);
-  if (result.material_estimated) {
-    Say(o.common, "Model %s, shininess %.1f; ks median [%.3f %.3f %.3f]\n",
-        reflectance::LobeName(result.model).c_str(), result.shininess, result.ks[0], result.ks[1],
-        result.ks[2]);
-  }
-  if (std::string line = ShadingWeightsLine(result.model_choice.shading); !line.empty()) {
-    Say(o.common, "%s\n", line.c_str());
-  }
-  if (result.summary.dark_pixels + result.summary.underdetermined_pixels > 0) {
-    Say(o.common,
-        "%zu pixels dark in every image and %zu with fewer than 3 usable lights: "
-        "flagged -1 in residual.exr\n",
-        result.summary.dark_pixels, result.summary.underdetermined_pixels);
-  }
+  SayModelAndFlags(o.common, result);
   Say(o.common, "Wrote %s: normals.exr/.png, albedo.exr/.png, residual.exr, metrics.json%s%s%s\n",
       o.output_dir.c_str(), result.material_estimated ? ", material.json" : "",
       specular ? ", specular.exr" : "", model ? ", model.exr" : "");

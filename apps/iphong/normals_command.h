@@ -72,6 +72,16 @@ std::string ShadingWeightsLine(const solve::ShadingMisfit& m);
 // metrics.json's "material": known, lambertian, estimated or lambertian (chosen).
 std::string MaterialLabel(const solve::NormalOptions& options, const solve::NormalResult& result);
 
+// The solve's part of metrics.json, the same whole and in bands: the model and its choice (each
+// candidate's held-out score, the pixels each model took: `specular_pixels` of `chosen_pixels`
+// in model.exr), the shading weights, the timings and counts, and the material.
+nlohmann::json SolveMetricsJson(const solve::NormalOptions& options,
+                                const solve::NormalResult& result, std::size_t specular_pixels,
+                                std::size_t chosen_pixels);
+// The lines a run prints after its timings, whole or in bands: the model and its ks (or why
+// there is none), the weights by N·L, the pixels flagged.
+void SayModelAndFlags(const CommonOptions& common, const solve::NormalResult& result);
+
 // The light file's frame, checked on the normals it gave (integrate/frame_check.h: a file in
 // another image-plane frame returns the normals in that frame): a warning naming the reading
 // that fits, or with --strict an error. Nothing for a file with most lights behind the object,

@@ -76,6 +76,65 @@ std::string MaterialLabel(const solve::NormalOptions& options, const solve::Norm
                                                         : "lambertian (chosen)";
 }
 
+nlohmann::json SolveMetricsJson(const solve::NormalOptions& options,
+                                const solve::NormalResult& result, std::size_t specular_pixels,
+                                std::size_t chosen_pixels) {
+  nlohmann::json metrics;
+  metrics["model"] = reflectance::LobeName(result.model);
+  metrics["model_seconds"] = result.summary.model_seconds;
+  metrics["solve_seconds"] = result.summary.solve_seconds;
+  metrics["iterations"] = result.summary.iterations;
+  if (!result.model_choice.scored.empty()) {
+    nlohmann::json scores = nlohmann::json::array();
+    for (const solve::ModelCandidate& m : result.model_choice.scored) {
+      scores.push_back({{"model", reflectance::LobeName(m.lobe)},
+                        {"shininess", m.shininess},
+                        {"ambient_term", {m.ambient_term[0], m.ambient_term[1], m.ambient_term[2]}},
+                        {"ks_prior_weight", m.ks_prior_weight},
+                        {"code_offset", m.code_offset},
+                        {"heldout_cost", m.heldout_cost},
+                        {"heldout_error", m.heldout_error},
+                        {"fold_angle_deg", m.fold_angle_deg},
+                        {"heldout_pixels", m.heldout_pixels}});
+    }
+    metrics["model_choice"] = {{"chosen", reflectance::LobeName(result.model)},
+                               {"pixels_choosing_it", specular_pixels},
+                               {"pixels_choosing_lambert", chosen_pixels - specular_pixels},
+                               {"shininess", result.shininess},
+                               {"pixels", result.model_choice.pixels},
+                               {"integer_code_step", result.model_choice.code_step},
+                               {"code_offset", result.code_offset},
+                               {"scores", scores}};
+  }
+  if (auto w = ShadingWeightsJson(result.model_choice.shading); !w.is_null()) {
+    metrics["shading_weights"] = w;
+  }
+  metrics["dark_pixels"] = result.summary.dark_pixels;
+  metrics["underdetermined_pixels"] = result.summary.underdetermined_pixels;
+  metrics["material"] = MaterialLabel(options, result);
+  if (!result.specular_note.empty()) metrics["specular_note"] = result.specular_note;
+  return metrics;
+}
+
+void SayModelAndFlags(const CommonOptions& common, const solve::NormalResult& result) {
+  if (result.material_estimated) {
+    Say(common, "Model %s, shininess %.1f; ks median [%.3f %.3f %.3f] (%s)\n",
+        reflectance::LobeName(result.model).c_str(), result.shininess, result.ks[0], result.ks[1],
+        result.ks[2], result.specular_note.c_str());
+  } else if (!result.specular_note.empty()) {
+    Say(common, "%s\n", result.specular_note.c_str());
+  }
+  if (std::string line = ShadingWeightsLine(result.model_choice.shading); !line.empty()) {
+    Say(common, "%s\n", line.c_str());
+  }
+  if (result.summary.dark_pixels + result.summary.underdetermined_pixels > 0) {
+    Say(common,
+        "%zu pixels dark in every image and %zu with fewer than 3 usable lights: "
+        "flagged -1 in residual.exr\n",
+        result.summary.dark_pixels, result.summary.underdetermined_pixels);
+  }
+}
+
 solve::NormalOptions NormalOptionsFor(const NormalsCommandOptions& o, const io::Dataset& d) {
   solve::NormalOptions options;
   options.discard_dark = o.discard_dark;

@@ -53,6 +53,12 @@ def test_bands_equal_the_whole(captures, tmp_path, layout, rows, flags):
     whole = json.loads((tmp_path / "whole" / "metrics.json").read_text())
     assert metrics["model"] == whole["model"]
     assert metrics["pixels"] == whole["pixels"]
+    # The solve's report is the same too: the model choice with every candidate's score, the
+    # weights by N.L, the flagged pixels (bands once left the scores and code step out).
+    for key in ("model_choice", "shading_weights", "dark_pixels", "underdetermined_pixels",
+                "material", "specular_note", "iterations"):
+        assert metrics.get(key) == whole.get(key), key
+    assert "scores" in whole.get("model_choice", {"scores": 0}), whole.get("model_choice")
     maps = ["normals.exr", "normals.png", "albedo.exr", "residual.exr"]
     maps += [m for m in ("specular.exr", "model.exr") if (tmp_path / "whole" / m).exists()]
     for name in maps:
