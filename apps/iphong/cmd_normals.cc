@@ -419,6 +419,11 @@ void AddNormalsCommand(CLI::App& app) {
   cmd->add_flag("--uniform-weights", o->uniform_weights,
                 "Weigh every observation alike (by default a band of oblique lights whose held-out "
                 "misfit is biased is weighed down and the bias left taken off)");
+  cmd->add_flag("!--no-pixel-test", o->pixel_test,
+                "Skip each pixel's held-out test of Lambert against the object's model (every "
+                "pixel takes the object's model, its ks fitted per pixel; no model.exr): under 24 "
+                "lights or fewer, where the test holds out one light at a time, it is most of the "
+                "solve (docs/benchmarks.md has the time and accuracy it trades)");
   cmd->add_flag("--fast", o->fast,
                 "Fit normals to the luminance instead of all three channels (about 2x faster)");
   cmd->add_flag("--estimate-intensities", o->estimate_intensities,

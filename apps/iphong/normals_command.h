@@ -29,6 +29,7 @@ struct NormalsCommandOptions {
   int irls_rounds = solve::NormalOptions{}.irls_rounds;
   bool fast = false;
   bool uniform_weights = false;  // no weights by N·L (NormalOptions::weigh_by_shading off)
+  bool pixel_test = true;  // each pixel's Lambert-or-lobe test (NormalOptions::per_pixel_model)
   bool integrate = false;
   bool estimate_intensities = false;
   bool strict = false;     // a light file in another frame is an error, not a warning

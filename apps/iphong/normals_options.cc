@@ -102,6 +102,8 @@ nlohmann::json SolveMetricsJson(const solve::NormalOptions& options,
                                {"pixels_choosing_lambert", chosen_pixels - specular_pixels},
                                {"shininess", result.shininess},
                                {"pixels", result.model_choice.pixels},
+                               // false with --no-pixel-test: every pixel took the chosen model
+                               {"pixel_test", options.per_pixel_model},
                                {"integer_code_step", result.model_choice.code_step},
                                {"code_offset", result.code_offset},
                                {"scores", scores}};
@@ -144,6 +146,7 @@ solve::NormalOptions NormalOptionsFor(const NormalsCommandOptions& o, const io::
   options.irls_rounds = o.irls_rounds;
   options.color_residuals = !o.fast;
   options.weigh_by_shading = !o.uniform_weights;
+  options.per_pixel_model = o.pixel_test;
   if (d.material && !o.ignore_material) {
     options.model = d.material->model;
     options.material_known = true;
