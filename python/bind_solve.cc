@@ -308,7 +308,7 @@ fewer than 6 images.)doc");
          const py::object& light_directions, const py::object& light_intensities,
          const py::object& model, const py::object& material, double discard_dark,
          double discard_bright, bool fast, double shadow_threshold, int threads,
-         bool weigh_by_shading) {
+         bool weigh_by_shading, bool per_pixel_model) {
         const FloatStack obs = FloatStack::ensure(observations_in);
         if (!obs || obs.ndim() != 3 || obs.shape(2) != 3) {
           throw std::invalid_argument("observations: expected (n, K, 3) float");
@@ -337,6 +337,7 @@ fewer than 6 images.)doc");
         solve::NormalOptions options = OptionsFrom(model, material, discard_dark, discard_bright,
                                                    fast, shadow_threshold, threads);
         options.weigh_by_shading = weigh_by_shading;
+        options.per_pixel_model = per_pixel_model;
         if (k < 3) throw std::invalid_argument("the plan needs at least 3 images");
         solve::NormalPlan plan;
         {
@@ -351,6 +352,7 @@ fewer than 6 images.)doc");
       py::arg("discard_dark") = 0.3, py::arg("discard_bright") = 0.1, py::arg("fast") = false,
       py::arg("shadow_threshold") = solve::NormalOptions{}.shadow_threshold, py::arg("threads") = 0,
       py::kw_only(), py::arg("weigh_by_shading") = solve::NormalOptions{}.weigh_by_shading,
+      py::arg("per_pixel_model") = solve::NormalOptions{}.per_pixel_model,
       R"doc(The whole-object decisions of estimate_normals (the model, its shininess, the ambient
 term, the weights and offsets by N·L), from the plan sample: observations (n, K, 3) of the
 pixels at `positions` (ascending row-major indices in a width x height image;
@@ -390,7 +392,7 @@ depend on its own observations and the plan only, so any blocking gives the same
          double shadow_threshold, int threads, const py::object& max_memory_gb,
          const py::object& light_positions, const py::object& camera, const py::object& light_axes,
          const py::object& light_anisotropy, const py::object& distance,
-         const py::object& light_distance, bool weigh_by_shading) {
+         const py::object& light_distance, bool weigh_by_shading, bool per_pixel_model) {
         const MemoryLimit memory = MemoryLimitFrom(max_memory_gb);
         const FloatStack images = ToImageStack(images_in);
         const std::size_t k = images.shape(0);
@@ -399,6 +401,7 @@ depend on its own observations and the plan only, so any blocking gives the same
         solve::NormalOptions options = OptionsFrom(model, material, discard_dark, discard_bright,
                                                    fast, shadow_threshold, threads);
         options.weigh_by_shading = weigh_by_shading;
+        options.per_pixel_model = per_pixel_model;
         if (k < 3 && !options.known_albedo) {
           throw std::invalid_argument(
               "with 1 or 2 images pass material={'kd': ..., ...}: the coefficients must be "
@@ -471,6 +474,7 @@ depend on its own observations and the plan only, so any blocking gives the same
       py::arg("light_anisotropy") = py::none(), py::arg("distance") = py::none(),
       py::arg("light_distance") = "auto",
       py::arg("weigh_by_shading") = solve::NormalOptions{}.weigh_by_shading,
+      py::arg("per_pixel_model") = solve::NormalOptions{}.per_pixel_model,
       R"doc(Recover per-pixel normals and albedo (see `iphong normals`).
 
 images (K, H, W, 3) linear float; light_directions (K, 3) from the surface toward the light;
@@ -482,7 +486,9 @@ candidate), "phong", "blinn-phong" or "normal-centred" (that lobe, its shininess
 with ka, ks, shininess, ambient (and model) when the coefficients are known, else ks is
 estimated per pixel; shadow_threshold: observations darker than the model by more than this
 fraction of the pixel's brightness count as shadowed. With the model chosen, model_map (H, W) says
-per pixel which won its own held-out test: 1 the specular model, 0 Lambert, -1 no normal, and
+per pixel which won its own held-out test: 1 the specular model, 0 Lambert, -1 no normal
+(per_pixel_model=False, as `iphong normals --no-pixel-test`, gives every pixel the chosen model
+untested and no model_map: under 24 lights or fewer the test is most of the solve), and
 shading_weights says how the observations were weighed by N·L (band_upper_n_dot_l, weight,
 offset, heldout_bias, heldout_spread, rounds, offset_rounds: a band toward the terminator whose
 held-out misfit is biased is weighed down, and the bias the weights leave is taken off its

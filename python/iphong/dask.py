@@ -81,7 +81,8 @@ def _effective_distance(images, mask_np, mask_da, masked, directions, intensitie
 def estimate_normals(images, light_directions, light_intensities=None, mask=None, model=None,
                      material=None, discard_dark=0.3, discard_bright=0.1, fast=False,
                      shadow_threshold=0.1, plan_sample=131072, threads_per_block=1, *,
-                     encoding=None, light_distance="auto", weigh_by_shading=True):
+                     encoding=None, light_distance="auto", weigh_by_shading=True,
+                     per_pixel_model=True):
     """iphong.estimate_normals on a dask.array (K, H, W, 3), chunked over H and W only.
 
     mask: (H, W) bool (numpy or dask) or None (every pixel). Returns a dict: normals, albedo,
@@ -97,7 +98,8 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
     same pixels as in memory, and each near pass maps the blocks again; the maps returned are
     then in memory, wrapped as dask arrays with the images' chunks, and equal to
     iphong.estimate_normals' bit for bit; r['effective_distance'] says what was chosen. With
-    'inf' and no foil everything stays lazy. weigh_by_shading: as iphong.estimate_normals.
+    'inf' and no foil everything stays lazy. weigh_by_shading, per_pixel_model: as
+    iphong.estimate_normals.
     Integer images (uint8, uint16) need encoding='linear' or 'srgb', as in
     iphong.estimate_normals (scaled to [0, 1], the sRGB curve undone; each block lazily); float
     images with encoding='srgb' are linearized.
@@ -158,7 +160,7 @@ def estimate_normals(images, light_directions, light_intensities=None, mask=None
         sample = _np.zeros((0, k, 3), _np.float32)
     plan = _core.plan_normals(sample, positions, w, h, directions, intensities, model, material,
                               discard_dark, discard_bright, fast, shadow_threshold,
-                              weigh_by_shading=weigh_by_shading)
+                              weigh_by_shading=weigh_by_shading, per_pixel_model=per_pixel_model)
     plan["options"]["plan_sample"] = plan_sample
 
     mask_da = da.from_array(mask_np, chunks=images.chunks[1:3])

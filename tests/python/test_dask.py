@@ -72,6 +72,18 @@ def test_known_material_and_lambert(capture):
             np.testing.assert_array_equal(r[name].compute(), expected[name], err_msg=name)
 
 
+def test_without_the_per_pixel_test_too(capture):
+    """per_pixel_model=False travels in the plan to every block: the maps equal the whole's."""
+    expected = iphong.estimate_normals(capture["images"], capture["light_directions"],
+                                       capture["light_intensities"], capture["mask"],
+                                       per_pixel_model=False)
+    assert "model_map" not in expected
+    r = solve(capture, (10, 12), per_pixel_model=False)
+    assert r["plan"]["options"]["per_pixel_model"] is False
+    for name in ("normals", "albedo", "specular", "residual"):
+        np.testing.assert_array_equal(r[name].compute(), expected[name], err_msg=name)
+
+
 def test_bad_arrays_raise_value_error(capture):
     images = da.from_array(capture["images"], chunks=(10, 20, 20, 3))
     with pytest.raises(ValueError, match="chunk over H and W only"):

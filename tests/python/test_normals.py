@@ -47,6 +47,27 @@ def test_unknown_material_is_estimated():
     assert e < 0.5 < w
 
 
+def test_without_the_per_pixel_test_every_pixel_takes_the_objects_model():
+    """per_pixel_model=False (`iphong normals --no-pixel-test`): the pixels the test gave to
+    Lambert are fitted with the chosen model, their ks per pixel; every other pixel keeps its
+    normal bit for bit (a pixel's fit depends on its own lights and the plan only)."""
+    out = iphong.render(SCENE, per_light=True)
+    args = (out["images"], out["light_directions"], out["light_intensities"], out["mask"])
+    tested = iphong.estimate_normals(*args, light_distance="inf")
+    untested = iphong.estimate_normals(*args, light_distance="inf", per_pixel_model=False)
+    assert "model_map" not in untested and untested["model"] == tested["model"] == "phong"
+    lambert = tested["model_map"] == 0
+    assert lambert.sum() > 100, lambert.sum()
+    kept = ~lambert
+    np.testing.assert_array_equal(untested["normals"][kept], tested["normals"][kept])
+    assert (tested["specular"][lambert] == 0).all() and (untested["specular"][lambert] > 0).any()
+    assert np.abs(untested["normals"][lambert] - tested["normals"][lambert]).max() > 1e-5
+    # Both within the exact render's few hundredths of a degree.
+    for r in (tested, untested):
+        assert iphong.angular_error(r["normals"], out["normals"], out["mask"])[
+            "mean_angular_error_deg"] < 0.5
+
+
 def test_float_images_brighter_than_one_are_data_not_clipping():
     """Float arrays passing 1 (an HDR capture) were not clipped at 1: the same normals as the same
     images at unit scale. Before, every value above 0.995 was left out (4 degrees and more)."""
