@@ -2,7 +2,8 @@
 """Whole-run speed: `iphong normals` with `--model lambert` and with the default on the same capture,
 interleaved in one session, and the default's wall time as a ratio of Lambert's (issue 30's figure:
 the machine is shared and noisy, so only ratios measured in one run are compared). With
-`--baseline BIN` another build's default run joins the rotation (before/after a change).
+`--baseline BIN` another build's default run joins the rotation (before/after a change), with
+`--variant FLAGS` the default with those flags (e.g. `--variant=--no-pixel-test`).
 
     /usr/bin/python3 bench/whole_run.py FOLDER [--repeats 3] [--baseline OLD_IPHONG]
     /usr/bin/python3 bench/whole_run.py --make 1664 12    (a 2.8-megapixel, 12-light sphere made
@@ -38,6 +39,9 @@ def main():
                         help="make a synthetic capture with build/bench/make_capture instead")
     parser.add_argument("--iphong", default=str(ROOT / "build" / "iphong"))
     parser.add_argument("--baseline", help="another iphong binary whose default run joins the rotation")
+    parser.add_argument("--variant", action="append", default=[], metavar="FLAGS",
+                        help="the default with these flags joins the rotation (repeatable), e.g. "
+                             "--variant=--no-pixel-test")
     parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--threads", default="0")
     args = parser.parse_args()
@@ -51,6 +55,8 @@ def main():
             subprocess.run([str(maker), str(folder), *map(str, args.make)], check=True,
                            stdout=subprocess.DEVNULL)
         runs = [("lambert", args.iphong, ["--model", "lambert"]), ("default", args.iphong, [])]
+        for variant in args.variant:
+            runs.append((f"default {variant}", args.iphong, variant.split()))
         if args.baseline:
             runs.append(("default, baseline build", args.baseline, []))
         times = {name: [] for name, _, _ in runs}
