@@ -107,6 +107,11 @@ nlohmann::json SolveMetricsJson(const solve::NormalOptions& options,
                                {"integer_code_step", result.model_choice.code_step},
                                {"code_offset", result.code_offset},
                                {"scores", scores}};
+    if (!options.per_pixel_model) {
+      // No pixel chose: every one took the chosen model (a count of 0 would say none did).
+      metrics["model_choice"].erase("pixels_choosing_it");
+      metrics["model_choice"].erase("pixels_choosing_lambert");
+    }
   }
   if (auto w = ShadingWeightsJson(result.model_choice.shading); !w.is_null()) {
     metrics["shading_weights"] = w;

@@ -45,6 +45,7 @@ def test_no_pixel_test_gives_every_pixel_the_objects_model_and_changes_nothing_e
     tested = json.loads((tmp_path / "tested" / "metrics.json").read_text())["model_choice"]
     untested = json.loads((tmp_path / "untested" / "metrics.json").read_text())["model_choice"]
     assert tested["pixel_test"] and not untested["pixel_test"]
+    assert "pixels_choosing_lambert" not in untested and "pixels_choosing_it" not in untested
     assert tested["pixels_choosing_lambert"] > 0 and tested["pixels_choosing_it"] > 0, tested
     assert untested["chosen"] == tested["chosen"] and untested["shininess"] == tested["shininess"]
     assert (tmp_path / "tested" / "model.exr").exists()
