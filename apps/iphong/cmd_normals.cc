@@ -214,7 +214,10 @@ void RunNormals(const NormalsCommandOptions& o) {
   nlohmann::json metrics;
   std::optional<near::EffectiveDistanceResult> effective;
   if (!near_run && data.images >= 3) {
-    effective = SolveWithEffectiveDistance(o, data, options, metrics);
+    effective = estimated && estimated->run
+                    ? SolveWithEffectiveDistance(o, data, options, metrics,
+                                                 std::move(estimated->run), estimated->run_log)
+                    : SolveWithEffectiveDistance(o, data, options, metrics);
   }
   const solve::NormalResult result = near_run    ? near_run->result.normals
                                      : effective ? effective->normals

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "calibrate/lights.h"
 #include "integrate/frame_check.h"
@@ -106,9 +107,13 @@ nlohmann::json CheckEncoding(const NormalsCommandOptions& o, const io::Dataset& 
 // estimate is right: beside a file the images do not contradict, or within the estimate's own
 // error of equal lights (unless --intensities none asked for it unchecked); warns otherwise.
 // `metrics` is metrics.json's "estimated_intensities".
+// Where the check ran the command's own run under the estimate (distant lights), it is kept in
+// `run` with its log lines, and the command writes it rather than solving it again.
 struct EstimatedIntensities {
   calibrate::IntensityEstimate estimate;
   nlohmann::json metrics;
+  std::optional<near::EffectiveDistanceResult> run;
+  std::vector<std::string> run_log;
 };
 EstimatedIntensities EstimateCheckedIntensities(const NormalsCommandOptions& o,
                                                 const io::Dataset& dataset,
@@ -139,10 +144,13 @@ NearRun SolveNearCapture(const NormalsCommandOptions& o, const io::Dataset& d,
 // Directions only (near/effective_distance.h): the distant solve and, unless --light-distance
 // inf, the effective distance chosen (or given) and the near passes; metrics.json's
 // "effective_distance".
-near::EffectiveDistanceResult SolveWithEffectiveDistance(const NormalsCommandOptions& o,
-                                                         const solve::PhotometricData& data,
-                                                         const solve::NormalOptions& options,
-                                                         nlohmann::json& metrics);
+// With `done` (a run already made on the same data and options, and its log lines) that run is
+// reported instead of a new one.
+near::EffectiveDistanceResult SolveWithEffectiveDistance(
+    const NormalsCommandOptions& o, const solve::PhotometricData& data,
+    const solve::NormalOptions& options, nlohmann::json& metrics,
+    std::optional<near::EffectiveDistanceResult> done = std::nullopt,
+    const std::vector<std::string>& done_log = {});
 // The options of both runs (whole and in bands) from --light-distance; throws
 // std::invalid_argument on a bad value.
 near::EffectiveDistanceOptions EffectiveDistanceOptionsFor(const NormalsCommandOptions& o,

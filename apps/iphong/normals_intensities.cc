@@ -33,14 +33,23 @@ EstimatedIntensities EstimateCheckedIntensities(const NormalsCommandOptions& o,
                  {"lambert_residual", estimate.lambert_residual}};
 
   // Each set's run as this command makes it (the effective distance, and with it the foil's
-  // refit), so the figure compares the normals it would write; quiet, the runs' lines unsaid.
+  // refit), so the figure compares the normals it would write. The estimate's run is the one the
+  // command writes when the estimate is used: kept, with its lines, not made twice; the other
+  // set's run is quiet.
   std::function<solve::NormalResult(const solve::PhotometricData&)> whole_run;
   if (!dataset.files.near.present()) {
     whole_run = [&](const solve::PhotometricData& under) {
       near::EffectiveDistanceOptions e =
           EffectiveDistanceOptionsFor(o, NormalOptionsFor(o, dataset));
+      const bool estimate_run = under.light_intensities == estimate.light_intensities;
+      std::vector<std::string> lines;
       e.log = nullptr;
-      return near::SolveEffectiveDistance(under, e).normals;
+      if (estimate_run) e.log = [&lines](const std::string& line) { lines.push_back(line); };
+      near::EffectiveDistanceResult r = near::SolveEffectiveDistance(under, e);
+      if (!estimate_run) return r.normals;
+      out.run = std::move(r);
+      out.run_log = std::move(lines);
+      return out.run->normals;
     };
   }
   const auto compare = [&](const std::vector<Rgb>& other) {

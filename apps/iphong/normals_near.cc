@@ -204,16 +204,21 @@ nlohmann::json EffectiveDistanceJson(const near::EffectiveDistanceResult& r) {
           {"seconds", r.seconds}};
 }
 
-near::EffectiveDistanceResult SolveWithEffectiveDistance(const NormalsCommandOptions& o,
-                                                         const solve::PhotometricData& data,
-                                                         const solve::NormalOptions& options,
-                                                         nlohmann::json& metrics) {
+near::EffectiveDistanceResult SolveWithEffectiveDistance(
+    const NormalsCommandOptions& o, const solve::PhotometricData& data,
+    const solve::NormalOptions& options, nlohmann::json& metrics,
+    std::optional<near::EffectiveDistanceResult> done, const std::vector<std::string>& done_log) {
   const near::EffectiveDistanceOptions e = EffectiveDistanceOptionsFor(o, options);
   near::EffectiveDistanceResult r;
-  try {
-    r = near::SolveEffectiveDistance(data, e);
-  } catch (const std::invalid_argument& err) {
-    throw std::runtime_error(o.dataset + ": " + err.what());
+  if (done) {
+    r = std::move(*done);
+    for (const std::string& line : done_log) e.log(line);
+  } else {
+    try {
+      r = near::SolveEffectiveDistance(data, e);
+    } catch (const std::invalid_argument& err) {
+      throw std::runtime_error(o.dataset + ": " + err.what());
+    }
   }
   if (o.light_distance == "inf") return r;
   metrics["effective_distance"] = EffectiveDistanceJson(r);

@@ -75,9 +75,14 @@ CROP_BALL = DATA / "diligent-crop8" / "ball"
 def test_intensities_none_sets_the_capture_file_aside():
     """intensities="none" reads every light as 1 although the folder holds light_intensities.txt
     (DiLiGenT's range from 0.38 to 2.3), without touching the folder."""
+    def listing():
+        return sorted((f.name, f.stat().st_size, f.stat().st_mtime_ns) for f in CROP_BALL.iterdir())
+
+    before = listing()
     with_file = iphong.load_dataset(CROP_BALL)
     assert with_file["light_intensities"].max() > 2 * with_file["light_intensities"].min()
     none = iphong.load_dataset(CROP_BALL, intensities="none")
+    assert listing() == before
     np.testing.assert_array_equal(none["light_intensities"], np.ones((96, 3)))
     assert "intensities all 1 (--intensities none)" in none["description"]
     np.testing.assert_array_equal(none["images"], with_file["images"])
