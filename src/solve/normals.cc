@@ -4,7 +4,6 @@
 #include <atomic>
 #include <cmath>
 #include <memory>
-#include <numeric>
 #include <stdexcept>
 
 #include "core/parallel.h"
@@ -329,8 +328,6 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
     const WoodhamSettings woodham = WoodhamOf(o);
     const bool per_pixel = !o.material_known && o.per_pixel_model &&
                            o.model != reflectance::Lobe::kLambert && !fold.empty();
-    const bool leave_one_out =
-        !fold.empty() && 1 + *std::max_element(fold.begin(), fold.end()) == data.images;
     PixelFitSettings lambert_fit = fit;
     lambert_fit.model.lobe = reflectance::Lobe::kLambert;
     lambert_fit.ks_prior.reset();
@@ -421,11 +418,7 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
                 const auto [mean, error] =
                     PairedDifference(lambert_cost.data(), specular_cost.data(), lambert_cost.size(),
                                      fitter.usable());
-                const double scale = leave_one_out
-                                         ? LeaveOneOutErrorScale(std::accumulate(
-                                               fitter.usable(), fitter.usable() + data.images, 0.0))
-                                         : 1.0;
-                lambert_wins = mean <= -kPixelModelSignificance * scale * error;
+                lambert_wins = mean <= -kPixelModelSignificance * error;
               }
               won[p] = lambert_wins ? 0 : 1;
               if (lambert_wins) {
