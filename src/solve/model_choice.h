@@ -74,6 +74,8 @@ std::vector<int> LightFolds(int lights);
 
 // The mean of a_i − b_i over the n entries (those where use[i] ≠ 0, with `use`) and its standard
 // error, the entries taken as independent; {0, 0} for none. Without `b`, the mean of a itself.
+// Per-light held-out costs under leave-one-out are not independent (their fits share all but one
+// training light): there this error is about 1.4 times too small (bench/pixel_test_calibration).
 std::pair<double, double> PairedDifference(const double* a, const double* b, std::size_t n,
                                            const double* use = nullptr);
 

@@ -1,0 +1,183 @@
+// Is the per-pixel model test's standard error right? The test (solve/normals.cc) gives a pixel
+// to Lambert where Lambert's held-out cost is lower than the object's model's by more than
+// kPixelModelSignificance standard errors of the per-light paired difference, the K differences
+// taken as independent (PairedDifference). Under leave-one-out (24 lights or fewer) they come from
+// K fits sharing K − 2 of their K − 1 training lights.
+//
+// Many captures of one pixel, each with its own lights (uniform in a 55° cone about the view) and
+// its own Gaussian noise, go through the test's own calls: the full search under the object's
+// model, the gate on a negligible lobe, both models' held-out searches near the full one over
+// LightFolds(K), and PairedDifference. A calibrated standard error is, in root mean square over
+// the captures, the spread of their mean differences: the table gives spread / error as
+// PairedDifference states it and as Nadeau and Bengio's correction for overlapping training sets
+// would scale it under leave-one-out, √(1 + K/(K − 1)). The correction is not in the library:
+// docs/benchmarks.md says what it did and why it waits.
+//
+//   pixel_test_calibration [DRAWS [LIGHTS...]]     (default 1000 draws; 12 24 48 96 lights)
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "reflectance/phong.h"
+#include "solve/internal.h"
+#include "solve/model_choice.h"
+#include "solve/search.h"
+
+using namespace iphong;
+using namespace iphong::solve;
+
+namespace {
+
+// The variance of a cross-validated mean is σ²(1/n + n_test/n_train), not σ²/n (Nadeau and
+// Bengio, Machine Learning 52, 2003): for one light held out of n, a standard error √(1 + n/(n −
+// 1)) times the independent one.
+double NadeauBengioScale(double n) { return n > 1 ? std::sqrt(1 + n / (n - 1)) : 1.0; }
+
+struct ProbeCase {
+  reflectance::Lobe truth = reflectance::Lobe::kLambert;  // the pixel's true model
+  double shininess = 1, kd = 1, ks = 0;
+  double tilt_deg = 0;  // the normal's angle from the view
+  int lights = 12;
+  double noise = 0.01;  // Gaussian σ as a fraction of the pixel's brightness
+  reflectance::Lobe model = reflectance::Lobe::kBlinnPhong;  // the object's model
+  double model_shininess = 20;
+};
+
+struct ProbeResult {
+  int tested = 0;       // captures the gate let through
+  double mean = 0;      // of the mean paired differences (Lambert − model; > 0: model better)
+  double spread = 0;    // their standard deviation over the captures
+  double stated = 0;    // root mean square of the standard errors PairedDifference stated
+  double scaled = 0;    // the same, scaled by NadeauBengioScale under leave-one-out
+  double untested = 0;  // share of the captures whose lobe was negligible
+  double lambert = 0;   // share of the tested that the test gave to Lambert
+};
+
+ProbeResult Probe(const ProbeCase& c, int draws, std::mt19937_64& rng) {
+  std::normal_distribution<double> gauss(0, 1);
+  std::uniform_real_distribution<double> uniform(0, 1);
+  const double cone = std::cos(55 * M_PI / 180), tilt = c.tilt_deg * M_PI / 180;
+  const Vec3d normal(std::sin(tilt), 0, std::cos(tilt)), view(0, 0, 1);
+  reflectance::ModelOptions truth, model, lambert;
+  truth.lobe = c.truth;
+  model.lobe = c.model;
+  lambert.lobe = reflectance::Lobe::kLambert;
+  const std::vector<int> fold = LightFolds(c.lights);
+  const bool leave_one_out = 1 + *std::max_element(fold.begin(), fold.end()) == c.lights;
+  std::vector<double> buffer, lambert_cost(c.lights), model_cost(c.lights);
+  double sum = 0, sq = 0, stated = 0, scaled = 0;
+  int untested = 0, lambert_wins = 0, tested = 0;
+  for (int d = 0; d < draws; ++d) {
+    std::vector<Vec3d> lights(c.lights);
+    std::vector<double> y(c.lights), usable(c.lights, 1.0);
+    for (int j = 0; j < c.lights; ++j) {
+      const double z = cone + (1 - cone) * uniform(rng), phi = 2 * M_PI * uniform(rng);
+      const double r = std::sqrt(1 - z * z);
+      lights[j] = Vec3d(r * std::cos(phi), r * std::sin(phi), z);
+      const auto f =
+          reflectance::ShadingFactors<double>(normal, view, lights[j], c.shininess, truth);
+      y[j] = c.kd * f.diffuse + c.ks * f.specular;
+    }
+    std::vector<double> sorted = y;
+    const double clean = internal::BrightnessScale(sorted);
+    for (double& v : y) v += c.noise * clean * gauss(rng);
+    sorted = y;
+    const double brightness = internal::BrightnessScale(sorted), t = 0.1 * brightness;
+    const CandidateTable table(lights, model, c.model_shininess, 1000, fold);
+    const CandidateTable lambert_table(lights, lambert, 1.0, 1000, fold);
+    NormalSearch search(table), lambert_search(lambert_table);
+    const SearchResult r = search.Search(y.data(), usable.data(), t, nullptr);
+    if (r.candidate < 0) continue;
+    double lobe_peak = 0;
+    for (int j = 0; j < c.lights; ++j)
+      lobe_peak = std::max(lobe_peak, r.ks * table.specular(r.candidate)[j]);
+    if (lobe_peak <= kNegligibleLobe * brightness) {
+      ++untested;
+      continue;
+    }
+    lambert_search.NearTheLastOf(search);
+    HeldOutSearch(lambert_search, lambert_table, y.data(), usable.data(), fold.data(), t, buffer,
+                  true, nullptr, lambert_cost.data());
+    HeldOutSearch(search, table, y.data(), usable.data(), fold.data(), t, buffer, true, nullptr,
+                  model_cost.data());
+    const auto [mean, error] =
+        PairedDifference(lambert_cost.data(), model_cost.data(), c.lights, usable.data());
+    const double scale = leave_one_out ? NadeauBengioScale(c.lights) : 1.0;
+    ++tested;
+    sum += mean, sq += mean * mean;
+    stated += error * error, scaled += scale * scale * error * error;
+    if (mean <= -kPixelModelSignificance * error) ++lambert_wins;  // the test as it is
+  }
+  ProbeResult out;
+  out.tested = tested;
+  out.untested = static_cast<double>(untested) / draws;
+  if (tested == 0) return out;
+  out.mean = sum / tested;
+  out.spread = std::sqrt(std::max(0.0, sq / tested - out.mean * out.mean));
+  out.stated = std::sqrt(stated / tested);
+  out.scaled = std::sqrt(scaled / tested);
+  out.lambert = static_cast<double>(lambert_wins) / tested;
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int draws = argc > 1 ? std::stoi(argv[1]) : 1000;
+  std::vector<int> counts;
+  for (int i = 2; i < argc; ++i) counts.push_back(std::stoi(argv[i]));
+  if (counts.empty()) counts = {12, 24, 48, 96};
+  struct Truth {
+    const char* name;
+    reflectance::Lobe lobe;
+    double shininess, kd, ks;
+  };
+  const Truth truths[] = {
+      {"lambert", reflectance::Lobe::kLambert, 1, 1.0, 0.0},
+      {"blinn n20 ks0.3", reflectance::Lobe::kBlinnPhong, 20, 0.7, 0.3},
+      {"blinn n80 ks0.5", reflectance::Lobe::kBlinnPhong, 80, 0.5, 0.5},
+  };
+  std::mt19937_64 rng(20261129);
+  std::printf(
+      "| pixel | tilt | K | noise | tested | mean diff | spread | stated SE | spread/stated "
+      "| spread/scaled | Lambert takes |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (int k : counts) {
+    double ratio_stated = 0, ratio_scaled = 0;
+    int cases = 0;
+    for (const Truth& truth : truths) {
+      for (double tilt : {0.0, 30.0}) {
+        for (double noise : {0.01, 0.03}) {
+          ProbeCase c;
+          c.truth = truth.lobe;
+          c.shininess = truth.shininess;
+          c.kd = truth.kd;
+          c.ks = truth.ks;
+          c.tilt_deg = tilt;
+          c.lights = k;
+          c.noise = noise;
+          const auto r = Probe(c, draws, rng);
+          if (r.tested < 20 || !(r.stated > 0)) {
+            std::printf("| %s | %.0f | %d | %.2f | %d | (too few tested) |||||||\n", truth.name,
+                        tilt, k, noise, r.tested);
+            continue;
+          }
+          ratio_stated += r.spread / r.stated;
+          ratio_scaled += r.spread / r.scaled;
+          ++cases;
+          std::printf(
+              "| %s | %.0f | %d | %.2f | %d | %+.4f | %.4f | %.4f | %.2f | %.2f | %.1f %% |\n",
+              truth.name, tilt, k, noise, r.tested, r.mean, r.spread, r.stated, r.spread / r.stated,
+              r.spread / r.scaled, 100 * r.lambert);
+        }
+      }
+    }
+    if (cases > 0) {
+      std::printf("| **mean of %d cases** | | %d | | | | | | **%.2f** | **%.2f** | |\n", cases, k,
+                  ratio_stated / cases, ratio_scaled / cases);
+    }
+  }
+  return 0;
+}
