@@ -45,6 +45,9 @@ std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHead
   OIIO::ImageSpec config;
   config.attribute("raw:ColorSpace", "linear");
   config.attribute("raw:use_camera_wb", 0);
+  // A PNG's (or TIFF's) unassociated alpha is left as stored: OpenImageIO would otherwise multiply
+  // the colour by it, and a photo would read darker wherever it is partly transparent.
+  config.attribute("oiio:UnassociatedAlpha", 1);
   auto in = OIIO::ImageInput::open(path, &config);
   if (!in) {
     std::string why = OIIO::geterror();
@@ -199,6 +202,8 @@ void WriteImage(const std::string& path, const ImageF& image, const WriteOptions
                    is_float || options.encoding == Encoding::kLinear ? "Linear" : "sRGB");
   }
   spec.attribute("Software", "iphong");
+  // A fourth channel is written as given, as the readers above read it (no division by alpha).
+  spec.attribute("oiio:UnassociatedAlpha", 1);
 
   // Encoded in memory, so the bytes reach the disk through one verified write: OpenImageIO's
   // writers can report success on a full disk.

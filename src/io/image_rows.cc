@@ -149,6 +149,7 @@ ImageRowWriter::ImageRowWriter(const std::string& path, int width, int height, i
                    is_float_ || options.encoding == Encoding::kLinear ? "Linear" : "sRGB");
   }
   spec.attribute("Software", "iphong");
+  spec.attribute("oiio:UnassociatedAlpha", 1);  // a fourth channel as given, as WriteImage does
   proxy_ = std::make_unique<Proxy>(path);
   if (proxy_->error() != 0) throw OutputError(path + ": " + std::strerror(proxy_->error()));
   out_ = OIIO::ImageOutput::create(path);

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
@@ -86,6 +87,45 @@ TEST_F(ImageIoTest, FailedWriteLeavesNothingBehind) {
 // A mask is nonzero colour; a cut-out's alpha, where it varies, marks the object instead (its
 // transparent background may keep any colour: white here, the photo in practice); a JPEG's
 // compression leaves faint values around the object, so it is read above half its largest value.
+// A PNG's alpha is unassociated: its colour is stored as the camera gave it, whatever the alpha.
+// OpenImageIO premultiplies colour by alpha unless asked not to, which would darken a photo
+// wherever it is partly transparent (a cut-out's soft edge, an export that marks shadows) and
+// differently in each image whose alpha differs. Read as stored, the colour is the file's.
+TEST_F(ImageIoTest, PngColourIsReadAsStoredWhateverItsAlpha) {
+  const int w = 6, h = 2;
+  std::vector<std::uint16_t> stored(static_cast<std::size_t>(w) * h * 4);
+  for (int row = 0; row < h; ++row) {
+    for (int col = 0; col < w; ++col) {
+      std::uint16_t* v = stored.data() + 4 * (row * w + col);
+      v[0] = 51200, v[1] = 25600, v[2] = 12800;
+      v[3] = col < 2 ? 65535 : col < 5 ? 32768 : 0;  // opaque, half, transparent
+    }
+  }
+  OIIO::ImageSpec spec(w, h, 4, OIIO::TypeDesc::UINT16);
+  spec.alpha_channel = 3;
+  spec.attribute("oiio:UnassociatedAlpha", 1);  // the values above are written as they are
+  auto out = OIIO::ImageOutput::create(Path("rgba.png"));
+  ASSERT_TRUE(out && out->open(Path("rgba.png"), spec));
+  ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT16, stored.data()));
+  ASSERT_TRUE(out->close());
+
+  const ImageF image = ReadImage(Path("rgba.png"));
+  ASSERT_EQ(image.channels, 4);
+  for (int row = 0; row < h; ++row) {
+    for (int col = 0; col < w; ++col) {
+      const float* v = image.at(col, row);
+      for (int c = 0; c < 4; ++c) {
+        EXPECT_EQ(v[c], stored[4 * (row * w + col) + c] / 65535.0f) << col << " " << c;
+      }
+    }
+  }
+  // And iphong writes a fourth channel as given: the same values come back.
+  WriteImage(Path("again.png"), image, {16, Encoding::kLinear});
+  const ImageF again = ReadImage(Path("again.png"));
+  ASSERT_EQ(again.pixels.size(), image.pixels.size());
+  for (std::size_t i = 0; i < image.pixels.size(); ++i) EXPECT_EQ(again.pixels[i], image.pixels[i]);
+}
+
 TEST_F(ImageIoTest, MasksAreReadAsTheirMakersMeantThem) {
   const auto inside = [](int col, int row) { return col < 3 && row > 0; };
   std::size_t object = 0;
