@@ -84,9 +84,6 @@ TEST_F(ImageIoTest, FailedWriteLeavesNothingBehind) {
   EXPECT_TRUE(fs::is_empty(dir_));
 }
 
-// A mask is nonzero colour; a cut-out's alpha, where it varies, marks the object instead (its
-// transparent background may keep any colour: white here, the photo in practice); a JPEG's
-// compression leaves faint values around the object, so it is read above half its largest value.
 // A PNG's alpha is unassociated: its colour is stored as the camera gave it, whatever the alpha.
 // OpenImageIO premultiplies colour by alpha unless asked not to, which would darken a photo
 // wherever it is partly transparent (a cut-out's soft edge, an export that marks shadows) and
@@ -126,6 +123,9 @@ TEST_F(ImageIoTest, PngColourIsReadAsStoredWhateverItsAlpha) {
   for (std::size_t i = 0; i < image.pixels.size(); ++i) EXPECT_EQ(again.pixels[i], image.pixels[i]);
 }
 
+// A mask is nonzero colour; a cut-out's alpha, where it varies, marks the object instead (its
+// transparent background may keep any colour: white here, the photo in practice); a JPEG's
+// compression leaves faint values around the object, so it is read above half its largest value.
 TEST_F(ImageIoTest, MasksAreReadAsTheirMakersMeantThem) {
   const auto inside = [](int col, int row) { return col < 3 && row > 0; };
   std::size_t object = 0;
