@@ -5,13 +5,13 @@
 // K fits sharing K − 2 of their K − 1 training lights.
 //
 // Many captures of one pixel, each with its own lights (uniform in a 55° cone about the view) and
-// its own Gaussian noise, go through the test's own calls: the full search under the object's
-// model, the gate on a negligible lobe, both models' held-out searches near the full one over
-// LightFolds(K), and PairedDifference. A calibrated standard error is, in root mean square over
-// the captures, the spread of their mean differences: the table gives spread / error as
-// PairedDifference states it and as Nadeau and Bengio's correction for overlapping training sets
-// would scale it under leave-one-out, √(1 + K/(K − 1)). The correction is not in the library:
-// docs/benchmarks.md says what it did and why it waits.
+// its own Gaussian noise, go through the full search under the object's model and the solver's
+// own test (internal::TestPixelModel: the gate on a negligible lobe, both models' held-out
+// searches near the full one over LightFolds(K), and PairedDifference). A calibrated standard error
+// is, in root mean square over the captures, the spread of their mean differences: the table gives
+// spread / error as PairedDifference states it and as Nadeau and Bengio's correction for
+// overlapping training sets would scale it under leave-one-out, √(1 + K/(K − 1)). The correction is
+// not in the library: docs/benchmarks.md says what it did and why it waits.
 //
 //   pixel_test_calibration [DRAWS [LIGHTS...]]     (default 1000 draws; 12 24 48 96 lights)
 #include <algorithm>
@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "reflectance/phong.h"
+#include "solve/heldout_internal.h"
 #include "solve/internal.h"
 #include "solve/model_choice.h"
 #include "solve/search.h"
@@ -91,25 +92,20 @@ ProbeResult Probe(const ProbeCase& c, int draws, std::mt19937_64& rng) {
     NormalSearch search(table), lambert_search(lambert_table);
     const SearchResult r = search.Search(y.data(), usable.data(), t, nullptr);
     if (r.candidate < 0) continue;
-    double lobe_peak = 0;
-    for (int j = 0; j < c.lights; ++j)
-      lobe_peak = std::max(lobe_peak, r.ks * table.specular(r.candidate)[j]);
-    if (lobe_peak <= kNegligibleLobe * brightness) {
+    // The solver's own test (internal::TestPixelModel), without the object's ks prior.
+    const internal::PixelModelTest test = internal::TestPixelModel(
+        search, table, r, lambert_search, lambert_table, y.data(), usable.data(), t, brightness,
+        fold.data(), buffer, lambert_cost.data(), model_cost.data());
+    if (!test.tested) {
       ++untested;
       continue;
     }
-    lambert_search.NearTheLastOf(search);
-    HeldOutSearch(lambert_search, lambert_table, y.data(), usable.data(), fold.data(), t, buffer,
-                  true, nullptr, lambert_cost.data());
-    HeldOutSearch(search, table, y.data(), usable.data(), fold.data(), t, buffer, true, nullptr,
-                  model_cost.data());
-    const auto [mean, error] =
-        PairedDifference(lambert_cost.data(), model_cost.data(), c.lights, usable.data());
+    const double mean = test.mean, error = test.error;
     const double scale = leave_one_out ? NadeauBengioScale(c.lights) : 1.0;
     ++tested;
     sum += mean, sq += mean * mean;
     stated += error * error, scaled += scale * scale * error * error;
-    if (mean <= -kPixelModelSignificance * error) ++lambert_wins;  // the test as it is
+    if (test.lambert) ++lambert_wins;  // the test as it is
   }
   ProbeResult out;
   out.tested = tested;

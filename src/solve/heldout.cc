@@ -3,6 +3,7 @@
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
+#include <tuple>
 
 #include "core/parallel.h"
 #include "solve/heldout_internal.h"
@@ -128,6 +129,34 @@ void HeldOutPixels(const PhotometricData& data, const ModelCandidate& m,
           }
         });
   }
+}
+
+PixelModelTest TestPixelModel(NormalSearch& search, const CandidateTable& table,
+                              const SearchResult& r, NormalSearch& lambert_search,
+                              const CandidateTable& lambert_table, const double* y,
+                              const double* usable, double t, double brightness, const int* fold,
+                              std::vector<double>& buffer, double* lambert_cost,
+                              double* model_cost) {
+  const int k = table.lights();
+  double lobe_peak = 0;
+  const float* lobe = table.specular(r.candidate);
+  for (int j = 0; j < k; ++j) {
+    if (usable[j] != 0) lobe_peak = std::max(lobe_peak, r.ks * lobe[j]);
+  }
+  PixelModelTest out;
+  if (lobe_peak <= kNegligibleLobe * brightness) {
+    out.lambert = true;
+    return out;
+  }
+  out.tested = true;
+  lambert_search.NearTheLastOf(search);
+  HeldOutSearch(lambert_search, lambert_table, y, usable, fold, t, buffer, true, nullptr,
+                lambert_cost);
+  // The specular search above was the last full one of `search`.
+  HeldOutSearch(search, table, y, usable, fold, t, buffer, true, nullptr, model_cost);
+  std::tie(out.mean, out.error) = PairedDifference(lambert_cost, model_cost, k, usable);
+  out.lambert = out.mean <= -kPixelModelSignificance * out.error;
+  return out;
 }
 
 void SetHeldOutSummary(ModelCandidate& m, const std::vector<double>& cost,

@@ -48,6 +48,26 @@ void HeldOutPixels(const PhotometricData& data, const ModelCandidate& m,
                    const ModelChoiceSettings& settings, const std::vector<char>* which,
                    std::vector<double>& cost, std::vector<double>& angle,
                    HeldOutTables* tables = nullptr);
+// The per-pixel model test (NormalOptions::per_pixel_model), after the pixel's full search `r`
+// under the object's model (the last full search of `search`). Where the lobe adds under
+// kNegligibleLobe of `brightness` to every usable observation the two models are the same there:
+// Lambert's, untested. Otherwise each model is searched on each fold's training lights near `r`
+// (`fold`, K = table.lights()), and Lambert takes the pixel where its held-out cost is lower by
+// more than kPixelModelSignificance paired standard errors (PairedDifference). `buffer`,
+// `lambert_cost` and `model_cost` (K each) are the caller's, reused from pixel to pixel.
+struct PixelModelTest {
+  bool tested = false;   // false: the lobe was negligible
+  bool lambert = false;  // Lambert takes the pixel
+  double mean = 0;       // Lambert's held-out cost less the model's, per usable light
+  double error = 0;      // its standard error, the lights taken as independent
+};
+PixelModelTest TestPixelModel(NormalSearch& search, const CandidateTable& table,
+                              const SearchResult& r, NormalSearch& lambert_search,
+                              const CandidateTable& lambert_table, const double* y,
+                              const double* usable, double t, double brightness, const int* fold,
+                              std::vector<double>& buffer, double* lambert_cost,
+                              double* model_cost);
+
 // m's held-out cost, its standard error and fold angle: the means over the pixels given.
 void SetHeldOutSummary(ModelCandidate& m, const std::vector<double>& cost,
                        const std::vector<double>& angle);

@@ -10,6 +10,7 @@
 #include "core/timing.h"
 #include "solve/assemble.h"
 #include "solve/few_images.h"
+#include "solve/heldout_internal.h"
 #include "solve/highlight_check.h"
 #include "solve/internal.h"
 #include "solve/light_tiles.h"
@@ -401,25 +402,12 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
               // moved the seven DiLiGenT runs by 0.01° at most, harvest by −0.13°), and Lambert
               // takes the pixel only where it predicts the held-out lights clearly better
               // (kPixelModelSignificance).
-              double lobe_peak = 0;
-              const float* lobe = table.specular(r.candidate);
-              for (int j = 0; j < data.images; ++j) {
-                if (fitter.usable()[j] != 0) lobe_peak = std::max(lobe_peak, r.ks * lobe[j]);
-              }
-              bool lambert_wins = lobe_peak <= kNegligibleLobe * fitter.brightness();
-              if (!lambert_wins) {
-                lambert_search->NearTheLastOf(search);
-                HeldOutSearch(*lambert_search, *tables.lambert, fitter.luminance(), fitter.usable(),
-                              fold.data(), fitter.threshold(), buffer, true, nullptr,
-                              lambert_cost.data());
-                // The specular search above was the last full one of `search`.
-                HeldOutSearch(search, table, fitter.luminance(), fitter.usable(), fold.data(),
-                              fitter.threshold(), buffer, true, nullptr, specular_cost.data());
-                const auto [mean, error] =
-                    PairedDifference(lambert_cost.data(), specular_cost.data(), lambert_cost.size(),
-                                     fitter.usable());
-                lambert_wins = mean <= -kPixelModelSignificance * error;
-              }
+              const bool lambert_wins =
+                  internal::TestPixelModel(search, table, r, *lambert_search, *tables.lambert,
+                                           fitter.luminance(), fitter.usable(), fitter.threshold(),
+                                           fitter.brightness(), fold.data(), buffer,
+                                           lambert_cost.data(), specular_cost.data())
+                      .lambert;
               won[p] = lambert_wins ? 0 : 1;
               if (lambert_wins) {
                 lambert_fitter->Prepare(p);
