@@ -85,8 +85,9 @@ py::dict DistanceDict(const near::EffectiveDistanceResult& r) {
   py::list candidates;
   for (const near::DistanceCandidate& c : r.scored) {
     candidates.append(py::dict(
-        py::arg("distance_px") = c.distance_px, py::arg("test") = c.criterion,
-        py::arg("heldout_cost") = c.heldout_cost, py::arg("heldout_error") = c.heldout_error));
+        py::arg("distance_px") = c.distance_px, py::arg("centre_behind_px") = c.centre_behind_px,
+        py::arg("test") = c.criterion, py::arg("heldout_cost") = c.heldout_cost,
+        py::arg("heldout_error") = c.heldout_error));
   }
   py::list position_checks;
   for (const near::PositionCheck& c : r.position_checks) {
@@ -101,7 +102,9 @@ py::dict DistanceDict(const near::EffectiveDistanceResult& r) {
         py::dict(py::arg("normals_moved_deg") = p.change_deg, py::arg("seconds") = p.seconds));
   }
   return py::dict(py::arg("distance_px") = r.distance_px, py::arg("chosen") = r.chosen,
-                  py::arg("object_size_px") = r.object_size_px, py::arg("test") = r.criterion,
+                  py::arg("object_size_px") = r.object_size_px,
+                  py::arg("centre_behind_px") = r.centre_behind_px,
+                  py::arg("relief_px") = r.relief_px, py::arg("test") = r.criterion,
                   py::arg("heldout_gain") = r.gain, py::arg("heldout_gain_error") = r.gain_error,
                   py::arg("model_loss_at_diffuse_distance") =
                       std::isnan(r.model_loss) ? py::object(py::none()) : py::float_(r.model_loss),

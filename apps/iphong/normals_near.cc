@@ -165,6 +165,7 @@ nlohmann::json EffectiveDistanceJson(const near::EffectiveDistanceResult& r) {
     candidates.push_back(
         {{"distance_px",
           std::isinf(c.distance_px) ? nlohmann::json("inf") : nlohmann::json(c.distance_px)},
+         {"centre_behind_px", c.centre_behind_px},
          {"test", c.criterion},
          {"heldout_cost", c.heldout_cost},
          {"heldout_error", c.heldout_error}});
@@ -186,6 +187,9 @@ nlohmann::json EffectiveDistanceJson(const near::EffectiveDistanceResult& r) {
            std::isinf(r.distance_px) ? nlohmann::json("inf") : nlohmann::json(r.distance_px)},
           {"chosen", r.chosen},
           {"object_size_px", r.object_size_px},
+          // The lights' centre behind the distant surface's centroid, and that surface's rim.
+          {"centre_behind_px", r.centre_behind_px},
+          {"relief_px", r.relief_px},
           {"test", r.criterion},
           {"heldout_gain", r.gain},
           {"heldout_gain_error", r.gain_error},

@@ -1,21 +1,27 @@
 // Captures that give light directions only (DiLiGenT, UW, an RTI .lp) may still be near:
 // DiLiGenT's LEDs sit about a metre from 11 cm objects. One effective distance D puts every light
-// at S_j = c + D·L_j round the centre c of the object's surface (orthographic view, heights in
-// pixels: D in pixels), with the intensity it has at c (Φ_j = E_j·D², isotropic), and the
-// near-light loop (near.h) runs with those lights.
+// at S_j = c + D·L_j round the centre c the directions were measured from (orthographic view,
+// heights in pixels: D in pixels), with the intensity it has at c (Φ_j = E_j·D², isotropic), and
+// the near-light loop (near.h) runs with those lights. c is the object's centre: behind the
+// visible surface's centroid by a depth δ chosen with D (a sphere's centroid is two thirds of its
+// radius in front of its centre; read from the centroid, a dome at 1.5 object sizes made the
+// normals 6.7° off at the true D, 0.3° from the centre).
 //
-// D is chosen by what predicts held-out lights best: the distant solve first (the plan, the
-// search, every pixel's fit), its normals integrated into a surface, then each candidate D — the
-// object's size times 2, 3, 4, 6, … 32, and D = ∞ (distant) — scored by held-out costs on the
-// model choice's pixels and folds (solve::PixelHeldOutCosts), each fold's normal refined from
-// the distant one with that D's lights (warm: no search), by two tests: the plan's model (a sharp
-// lobe places highlights by each pixel's light directions) and a Lambertian fit with highlights
-// censored (the diffuse fall-off, which a broad lobe can imitate). In each the lowest wins,
-// refined by golden section between its neighbours; D = ∞ is kept unless one of them predicts
-// better by more than one paired standard error (the more significant one then decides): a
-// truly distant capture is left as it is. A proposed D stands only where the surface's points
-// predict better than points placed by their normals (PositionCheck): near lights act by where
-// points are, a fit's misfit by which way they face.
+// D and δ are chosen by what predicts held-out lights best: the distant solve first (the plan,
+// the search, every pixel's fit), its normals integrated into a surface, then each candidate —
+// D = ∞ (distant), and the object's size times 1.5, 2, 3, 4, 6, … 32 with the centre at the
+// centroid and at the depth of the surface's rim — scored by held-out costs on the model
+// choice's pixels and folds (solve::PixelHeldOutCosts), each fold's normal refined from the
+// distant one with those lights (warm: no search), by two tests: the plan's model (a sharp lobe
+// places highlights by each pixel's light directions) and a Lambertian fit with highlights
+// censored (the diffuse fall-off, which a broad lobe can imitate). In each the lowest grid point
+// is refined: by a simplex search in (log D, δ) where the two depths' costs differ by more than
+// their paired standard error, else in log D by golden section with the centre at the rim. D = ∞
+// is kept unless one of them predicts better by more than one paired standard error (the more
+// significant one is tried first): a truly distant capture is left as it is. A proposed D stands
+// only where, on the surface it makes (every pixel refined under its lights and integrated), the
+// surface's points predict better than points placed by their normals (PositionCheck): near
+// lights act by where points are, a fit's misfit by which way they face.
 // With a finite D the model is chosen again (warm) with its lights, and the loop refines every
 // pixel from its distant normal, integrating and refining until the normals settle. At D = ∞
 // (chosen or given) with the foil kept, every pixel is refitted with the foil from its distant
@@ -34,14 +40,18 @@ namespace iphong::near {
 
 struct DistanceCandidate {
   double distance_px = std::numeric_limits<double>::infinity();
-  double heldout_cost = 0;   // mean per pixel, in units of each pixel's t²
-  double heldout_error = 0;  // its standard error
-  std::string criterion;     // "model" (the plan's) or "diffuse" (Lambert, highlights censored)
+  double centre_behind_px = 0;  // the lights' centre: this far behind the surface's centroid
+  double heldout_cost = 0;      // mean per pixel, in units of each pixel's t²
+  double heldout_error = 0;     // its standard error
+  std::string criterion;        // "model" (the plan's) or "diffuse" (Lambert, highlights censored)
 };
 
 // Nearness is a property of where the surface's points are. At the distance a test proposes,
-// the same lights are also set round points made from the normals alone: the least-squares fit
-// X ≈ a + s·N of the surface's points over the sample (on a sphere the surface itself). The
+// every pixel is refined under its lights from its distant normal (the object's model, Lambert
+// where the plan has the foil) and integrated; on that surface the same lights are also set
+// round points made from the normals alone: the least-squares fit X ≈ a + s·N of the surface's
+// points over the sample (on a sphere the surface itself, so there the check ties by
+// construction and decides on small consistent differences). The
 // fall-off of near lights depends on where points are; a gain made of a fit's misfit — a lobe's
 // tails a Phong lobe cannot take, a diffuse term of another shape — depends on which way they
 // face, and points placed by their normals predict it as well or better. Both fits that ran are
@@ -76,7 +86,11 @@ struct EffectiveDistanceResult {
   solve::NormalResult normals;  // the chosen D's (the distant solve's for D = ∞)
   solve::NormalResult distant;  // the distant solve's
   double distance_px = std::numeric_limits<double>::infinity();
-  double object_size_px = 0;              // the larger side of the mask's bounding box
+  double object_size_px = 0;  // the larger side of the mask's bounding box
+  // The lights' centre c: this far behind the distant surface's centroid, along the view (0 at
+  // D = ∞); and how far that surface's rim (its heights' 1st percentile) is behind the centroid.
+  double centre_behind_px = 0;
+  double relief_px = 0;
   std::vector<DistanceCandidate> scored;  // D = ∞ first, then the grid, then the refinement
   // Held-out cost at D = ∞ less at the chosen D (t² per pixel) and its paired standard error,
   // by the test that chose it ("model" or "diffuse"; "" for D = ∞).

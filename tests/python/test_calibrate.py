@@ -104,12 +104,20 @@ def test_semi_calibrated_intensities(name, intensity_bound, measured):
     errors = []
     for intensities in [d["light_intensities"], estimate["light_intensities"]]:
         result = iphong.estimate_normals(d["images"], d["light_directions"], intensities,
-                                         mask=d["mask"])
+                                         mask=d["mask"], light_distance="inf")
         errors.append(iphong.angular_error(result["normals"], d["normal_gt"],
                                            d["mask"])["mean_angular_error_deg"])
-    # Measured: cat 4.93 -> 4.98 deg, ball 1.90 -> 2.11 (the crops are truncated 8-bit codes:
-    # intensities estimated on them as recorded made the normals 5.74 and 2.75).
+    # Compared with the lights distant, as the intensities were estimated: measured cat 4.93 ->
+    # 4.98 deg, ball 1.65 -> 1.83 (the crops are truncated 8-bit codes: intensities estimated on
+    # them as recorded made the normals 5.74 and 2.75). An estimate made under distant lights
+    # takes in the fall-off an effective distance would explain (the ball's published intensities
+    # find D = 4400 px and 1.08 deg; the estimated ones keep D = infinity): the default with them
+    # is its distant run or better.
     assert errors[1] < errors[0] + 0.3, errors
+    default = iphong.estimate_normals(d["images"], d["light_directions"],
+                                      estimate["light_intensities"], mask=d["mask"])
+    assert iphong.angular_error(default["normals"], d["normal_gt"],
+                                d["mask"])["mean_angular_error_deg"] <= errors[1] + 0.02
     assert estimate["code_offset"] == pytest.approx(0.5 / 255)
     # The docstring carries the library's account of an unchecked estimate (the command line's
     # warning says the same constant, calibrate::kUncheckedEstimateNote).
