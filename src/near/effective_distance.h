@@ -5,7 +5,7 @@
 // the near-light loop (near.h) runs with those lights. c is the object's centre: behind the
 // visible surface's centroid by a depth δ chosen with D (a sphere's centroid is two thirds of its
 // radius in front of its centre; read from the centroid, a dome at 1.5 object sizes made the
-// normals 6.7° off at the true D, 0.3° from the centre).
+// normals 6.7° off at the true D; from the centre, 0.3° on a near-orthographic copy).
 //
 // D and δ are chosen by what predicts held-out lights best: the distant solve first (the plan,
 // the search, every pixel's fit), its normals integrated into a surface, then each candidate —
