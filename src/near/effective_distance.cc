@@ -300,7 +300,7 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
     struct Test {
       solve::ModelCandidate model;
       solve::ModelChoiceSettings settings;
-      std::vector<double> distant_costs, best_costs;  // at D = ∞ and at `distance`
+      std::vector<double> distant_costs;  // at D = ∞
       bool run = false, passes = false;
       double distance = 0, behind = 0, gain = 0, gain_error = 0;
     };
@@ -451,7 +451,6 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
       }
       const std::size_t best = best_of();
       test.distant_costs = costs[0];
-      test.best_costs = costs[best];
       const auto [mean, error] =
           solve::PairedDifference(costs[0].data(), costs[best].data(), costs[0].size());
       const double d = result.scored[first + best].distance_px;
@@ -626,7 +625,8 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
   // lights and points; the observations stay with the capture.
   // From the surface the chosen proposal made, where the object's model made it: that was the
   // first near pass (a Lambertian one, made where the plan had the foil, is not the object's).
-  const bool from_proposal = proposed && proposed->distance == distance && proposed->by_plan;
+  const bool from_proposal =
+      proposed && proposed->distance == distance && proposed->behind == behind && proposed->by_plan;
   if (from_proposal) depth = std::move(proposed->depth);
   PhotometricData near = NearData(LayoutOf(data), frame, depth, centre_at(behind), distance);
   std::vector<Vec3d> starts;
