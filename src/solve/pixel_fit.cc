@@ -64,7 +64,11 @@ struct PixelModel {
 
   Vec3d Normal(const Eigen::Vector2d& x) const { return (n0 + x[0] * t1 + x[1] * t2).normalized(); }
 
-  void Evaluate(const Eigen::Vector2d& x, Factors* factors) const {
+  // With `weight`, only the lights whose weight is nonzero (`weighted`) or zero (!weighted): a
+  // light of weight 0 takes no part in a step (Reduce, Coefficients), so a trial point need not
+  // run the model there; the rest are filled in once the steps end.
+  void Evaluate(const Eigen::Vector2d& x, Factors* factors, const double* weight = nullptr,
+                bool weighted = true) const {
     const Jet2 x0(x[0], 0), x1(x[1], 1);
     const Vec3T<Jet2> raw = n0.cast<Jet2>() + x0 * t1 + x1 * t2;
     const Vec3T<Jet2> normal = raw / raw.norm();
@@ -72,6 +76,7 @@ struct PixelModel {
     const Jet2 n(shininess);
     factors->resize(data->images);
     for (int j = 0; j < data->images; ++j) {
+      if (weight && (weight[j] != 0) != weighted) continue;
       (*factors)[j] =
           reflectance::ShadingFactors<Jet2, double>(normal, view, lights->direction(j), n, model);
     }
@@ -222,6 +227,7 @@ struct PixelFitter::State {
     PixelModel::NormalEquations eq = model.Reduce(factors, weights.data());
     double u = 1e-4, v = 2;
     int iterations = 0;
+    bool moved = false;
     for (; iterations < settings.max_iterations; ++iterations) {
       Eigen::Matrix2d damped = eq.jtj;
       for (int i = 0; i < 2; ++i) damped(i, i) += u * std::clamp(eq.jtj(i, i), 1e-6, 1e32);
@@ -229,7 +235,7 @@ struct PixelFitter::State {
       // 1e-8 of the chart is ~1e-6 degrees: stopping there saves iterations that polish noise.
       if (!step.allFinite() || step.norm() < 1e-8) break;
       const Eigen::Vector2d x_new = x + step;
-      model.Evaluate(x_new, &trial);
+      model.Evaluate(x_new, &trial, weights.data(), true);
       const PixelModel::NormalEquations eq_new = model.Reduce(trial, weights.data());
       const double change = eq.cost - eq_new.cost;
       const double predicted = step.dot(eq.descent - 0.5 * eq.jtj * step);
@@ -238,6 +244,7 @@ struct PixelFitter::State {
         x = x_new;
         std::swap(factors, trial);
         eq = eq_new;
+        moved = true;
         if (std::abs(change) < kCostTolerance * eq.cost) break;
         const double t = 2 * rho - 1;
         u *= std::max(1.0 / 3, 1 - t * t * t);
@@ -248,6 +255,7 @@ struct PixelFitter::State {
         v *= 2;
       }
     }
+    if (moved) model.Evaluate(x, &factors, weights.data(), false);
     return iterations;
   }
 };
