@@ -181,7 +181,9 @@ nlohmann::json EffectiveDistanceJson(const near::EffectiveDistanceResult& r) {
   }
   nlohmann::json passes = nlohmann::json::array();
   for (const near::NearPass& p : r.passes) {
-    passes.push_back({{"normals_moved_deg", p.change_deg}, {"seconds", p.seconds}});
+    passes.push_back({{"normals_moved_deg", p.change_deg},
+                      {"lights_moved_deg", p.lights_moved_deg},
+                      {"seconds", p.seconds}});
   }
   return {{"distance_px",
            std::isinf(r.distance_px) ? nlohmann::json("inf") : nlohmann::json(r.distance_px)},

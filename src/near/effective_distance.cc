@@ -674,16 +674,21 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
     record.change_deg = MeanChangeDeg(last, now, near);
     depth = IntegratedDepth(now, near, frame, std::vector<double>(pixels, 0.0), o.min_cos,
                             o.normals.threads);
-    near.points_cam = SurfacePoints(near, frame, depth);
+    std::vector<Vec3d> points = SurfacePoints(near, frame, depth);
+    record.lights_moved_deg = LightsMovedDeg(near, points);
+    near.points_cam = std::move(points);
     record.distance = distance;
     record.seconds = SecondsSince(pass_start);
     result.passes.push_back(record);
     last = std::move(now);
     char line[160];
-    std::snprintf(line, sizeof line, "near pass %d: normals moved %.3f deg, %.2f s", pass + 1,
-                  record.change_deg, record.seconds);
+    std::snprintf(line, sizeof line,
+                  "near pass %d: normals moved %.3f deg, lights %.3f deg, %.2f s", pass + 1,
+                  record.change_deg, record.lights_moved_deg, record.seconds);
     say(line);
-    if (record.change_deg < o.tolerance_deg) break;
+    // Settled, or the next pass would see the lights this one fitted under (the normals moved
+    // because the model was chosen again, or the first pass left the distant lights).
+    if (record.change_deg < o.tolerance_deg || record.lights_moved_deg < o.tolerance_deg) break;
   }
   if (solve::NeedsPlanSample(o.normals)) {
     std::vector<Vec3f> sample_ks;

@@ -71,9 +71,12 @@ struct EffectiveDistanceOptions {
   solve::NormalOptions normals;
   // > 0: this D (pixels) instead of choosing one; infinity: the distant solve alone.
   double distance_px = 0;
-  // Near passes after the distant solve, until the normals' mean change is under tolerance_deg.
-  // On DiLiGenT (D of 12-24 object sizes) every object's error was the same to 0.02° after one
-  // pass as after five; a tenth of a degree is under any photograph's accuracy.
+  // Near passes after the distant solve, until the normals' mean change is under tolerance_deg,
+  // or the lights as the new surface's points see them have moved by less than that
+  // (internal::LightsMovedDeg): the next pass would refit every pixel under the lights it has
+  // already been fitted under, to within the tolerance. On DiLiGenT (D of 12-24 object sizes)
+  // every object's error was the same to 0.02° after one pass as after five; a tenth of a degree
+  // is under any photograph's accuracy.
   int max_passes = 3;
   double tolerance_deg = 0.1;
   double min_cos = 0.05;  // integration's grazing guard

@@ -75,7 +75,10 @@ struct NearOptions {
 struct NearPass {
   std::string kind;       // "woodham", "solve" (plan and search) or "refine"
   double change_deg = 0;  // mean angle to the last pass's normals (0 for the first)
-  double distance = 0;    // the surface's mean distance along the axis after the pass
+  // How far the lights moved as the pass's new surface sees them (internal::LightsMovedDeg;
+  // effective distance's passes only, else 0).
+  double lights_moved_deg = 0;
+  double distance = 0;  // the surface's mean distance along the axis after the pass
   double seconds = 0;
 };
 

@@ -7,7 +7,9 @@
 #include "integrate/integrate.h"
 #include "near/internal.h"
 #include "near/near.h"
+#include "reflectance/lighting.h"
 #include "reflectance/phong.h"
+#include "solve/model_choice.h"
 #include "solve/pixel_fit.h"
 
 namespace iphong::near {
@@ -33,6 +35,33 @@ double MeanChangeDeg(const solve::NormalResult& a, const solve::NormalResult& b,
     ++n;
   }
   return n ? sum / n : 0.0;
+}
+
+double LightsMovedDeg(const solve::PhotometricData& data, const std::vector<Vec3d>& points) {
+  if (data.point_lights.empty() || points.size() != data.points_cam.size() || points.empty()) {
+    return 0.0;
+  }
+  // A mean to a few per cent: pixels spread over the object, not all of them (each costs two
+  // looks at every light).
+  const std::vector<std::size_t> spread = solve::SpreadIndices(points.size(), 2000);
+  double sum = 0;
+  for (const std::size_t i : spread) {
+    double largest = 0;
+    for (const reflectance::Light& light : data.point_lights) {
+      Vec3d l0, l1, e0, e1, unused;
+      const bool seen0 = reflectance::LightAt(light, data.points_cam[i], &l0, &e0, &unused);
+      const bool seen1 = reflectance::LightAt(light, points[i], &l1, &e1, &unused);
+      const double a = seen0 ? e0.maxCoeff() : 0.0, b = seen1 ? e1.maxCoeff() : 0.0;
+      if ((a > 0) != (b > 0)) {
+        largest = std::max(largest, M_PI / 2);
+      } else if (a > 0) {
+        const double turn = std::atan2(l0.cross(l1).norm(), l0.dot(l1));
+        largest = std::max(largest, turn + std::abs(std::log(b / a)));
+      }
+    }
+    sum += largest;
+  }
+  return sum / static_cast<double>(spread.size()) * 180 / M_PI;
 }
 
 std::vector<Vec3d> NormalsPerPixel(const solve::NormalResult& r,
