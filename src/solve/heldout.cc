@@ -155,7 +155,10 @@ PixelModelTest TestPixelModel(NormalSearch& search, const CandidateTable& table,
   // The specular search above was the last full one of `search`.
   HeldOutSearch(search, table, y, usable, fold, t, buffer, true, nullptr, model_cost);
   std::tie(out.mean, out.error) = PairedDifference(lambert_cost, model_cost, k, usable);
-  out.lambert = out.mean <= -kPixelModelSignificance * out.error;
+  if (1 + *std::max_element(fold, fold + k) == k) {
+    out.scale = LeaveOneOutErrorScale(std::accumulate(usable, usable + k, 0.0));
+  }
+  out.lambert = out.mean <= -kPixelModelSignificance * out.scale * out.error;
   return out;
 }
 

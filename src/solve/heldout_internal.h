@@ -60,6 +60,7 @@ struct PixelModelTest {
   bool lambert = false;  // Lambert takes the pixel
   double mean = 0;       // Lambert's held-out cost less the model's, per usable light
   double error = 0;      // its standard error, the lights taken as independent
+  double scale = 1;      // LeaveOneOutErrorScale under leave-one-out, else 1: the test's error
 };
 PixelModelTest TestPixelModel(NormalSearch& search, const CandidateTable& table,
                               const SearchResult& r, NormalSearch& lambert_search,

@@ -61,6 +61,8 @@ std::pair<double, double> PairedDifference(const double* a, const double* b, std
   return {mean, std::sqrt(std::max(0.0, sq / count - mean * mean) / count)};
 }
 
+double LeaveOneOutErrorScale(double n) { return n > 1 ? std::sqrt(1 + n / (n - 1)) : 1.0; }
+
 void MakeDiffuseTest(ModelCandidate& model, ModelChoiceSettings& settings) {
   model.lobe = reflectance::Lobe::kLambert;
   model.ks_prior_weight = 0;

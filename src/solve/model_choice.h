@@ -79,15 +79,28 @@ std::vector<int> LightFolds(int lights);
 std::pair<double, double> PairedDifference(const double* a, const double* b, std::size_t n,
                                            const double* use = nullptr);
 
+// The factor a pixel's paired standard error (PairedDifference over its n usable lights) is
+// scaled by when each fold holds out one light: √(1 + n/(n − 1)), 1.45 at 12 lights. Those n
+// differences come from n fits that share n − 2 of their n − 1 training lights, so they are not
+// independent, and their mean spreads more than the error that takes them as independent says.
+// This is Nadeau and Bengio's correction for overlapping training sets (Machine Learning 52,
+// 2003): the variance of a cross-validated mean is σ²(1/n + n_test/n_train), not σ²/n.
+// bench/pixel_test_calibration checks it on captures of one pixel with random lights and noise
+// (docs/benchmarks.md). With several lights per fold (more than kMinTrainingLights + 1 lights) the
+// formula does not describe the case (it would give 1.73 for two folds, whose training sets are
+// disjoint), and the error is taken as stated.
+double LeaveOneOutErrorScale(double n);
+
 // Each pixel overrules the object's specular model with Lambert only where Lambert's held-out
 // cost is lower by more than this many standard errors of the pixel's paired per-light
-// difference (PairedDifference): the same one-standard-error line the object's choice draws
-// between models that predict alike. The object's model was chosen on hundreds of pixels; a
-// pixel's comparison rests on its own K lights, and a near tie is noise, not evidence. The seven
-// DiLiGenT runs (means in degrees) trade along this line: from 0 (any lower cost) to 0.5, 1
-// and 2 the balls go 1.91 → 1.90 → 1.88 → 1.86 and harvest 17.02 → 16.80 → 16.62 → 16.45, while
-// pot1 goes 5.68 → 5.68 → 5.71 → 5.75 and cow 6.46 → 6.47 → 6.48 → 6.52 (their darkest pixels'
-// near ties are better fitted by Lambert); mean of the seven 6.10 / 6.06 / 6.04 / 6.02.
+// difference (PairedDifference, scaled by LeaveOneOutErrorScale under leave-one-out): the same
+// one-standard-error line the object's choice draws between models that predict alike. The object's
+// model was chosen on hundreds of pixels; a pixel's comparison rests on its own K lights, and a
+// near tie is noise, not evidence. The seven DiLiGenT runs (means in degrees) trade along this
+// line: from 0 (any lower cost) to 0.5, 1 and 2 the balls go 1.91 → 1.90 → 1.88 → 1.86 and
+// harvest 17.02 → 16.80 → 16.62 → 16.45, while pot1 goes 5.68 → 5.68 → 5.71 → 5.75 and cow 6.46
+// → 6.47 → 6.48 → 6.52 (their darkest pixels' near ties are better fitted by Lambert); mean of the
+// seven 6.10 / 6.06 / 6.04 / 6.02.
 constexpr double kPixelModelSignificance = 1;
 // Where the lobe adds less than this fraction of the pixel's brightness to every observation in
 // the fit to all its lights — under a photograph's noise of about 1 % — the two models are the

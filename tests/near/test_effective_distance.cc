@@ -145,7 +145,9 @@ TEST(EffectiveDistance, TheFoilAtDistantLightsIsRefittedAtEveryPixel) {
   const double after = MeanErrorDeg(whole.normals, capture.normal_gt);
   std::printf("distant solve %.3f deg (%zu pixels Lambert), refitted with the foil %.3f deg\n",
               before, lambert, after);
-  EXPECT_LT(after, 0.9 * before);  // measured 2.63 -> 2.23
+  // Measured 2.63 -> 2.23 while the per-pixel test took its leave-one-out error as stated;
+  // 2.19 -> 2.08 since it scales it (LeaveOneOutErrorScale), which leaves 18 pixels to Lambert.
+  EXPECT_LT(after, 0.97 * before);
 
   solve::BandSource source;
   source.width = data.width;

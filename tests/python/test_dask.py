@@ -206,16 +206,17 @@ def test_effective_light_distance_equals_the_whole():
 
 def test_the_foils_refit_at_distant_lights_equals_the_whole(tmp_path):
     """A matte sphere under a dome of 12 lights at 1.5 object sizes (numpy's render), read with
-    directions only: the model choice takes the foil and keeps the lights distant, and every pixel
+    directions only and distant lights asked for: the model choice takes the foil, and every pixel
     is refitted with the foil (effective_distance's foil_refit). Dask does the same refit block by
-    block, with the distance chosen and with distant lights asked for: the same maps bit for bit."""
+    block: the same maps bit for bit. (Left to choose, the dome keeps a distance since the
+    per-pixel test scales its leave-one-out error: 0.46 deg against 1.63 deg distant.)"""
     from test_near_lights import CASES, write_capture
     shape, lights, phong, sigma, _ = CASES["dome-lambert"]
     normals, _, mask = write_capture(tmp_path / "cap", shape, lights, phong, sigma)
     d = iphong.load_dataset(tmp_path / "cap")
     args = (d["light_directions"], d["light_intensities"], d["mask"])
     chunked = da.from_array(d["images"], chunks=(-1, 25, 31, -1))
-    for light_distance in ["auto", "inf"]:
+    for light_distance in ["inf"]:
         whole = iphong.estimate_normals(d["images"], *args, light_distance=light_distance)
         assert whole["model"] == "normal-centred", whole["model"]
         assert whole["effective_distance"]["foil_refit"]
