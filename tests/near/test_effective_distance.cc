@@ -46,8 +46,12 @@ void ExpectSame(const ImageF& banded, const ImageF& whole, const char* what) {
 }
 
 // A glossy sphere under a dome of 24 lights at 3 object sizes, seen orthographically and read
-// with directions only (the case the effective distance is for): D is chosen, the surface's points
-// explain its gain, passes run, and bands change nothing.
+// with directions only (the case the effective distance is for), D chosen and D given: the
+// choice's candidates and checks, the passes and every map are the same in bands as whole.
+// Whether the choice keeps its D here is the position check's known tie on a sphere (points
+// placed by their normals are the sphere): since the per-pixel test scales its leave-one-out
+// error it refuses 107 px by 5.3 standard errors of a difference of 0.001 against a gain of 9.7
+// (docs/guides/near-lights.md); at the D given the passes run either way.
 TEST(EffectiveDistance, InBandsEqualsTheWholeBitForBit) {
   NearScene s;
   s.width = 44;
@@ -60,41 +64,50 @@ TEST(EffectiveDistance, InBandsEqualsTheWholeBitForBit) {
   data.point_lights.clear();  // directions only
   data.perspective = false;
 
-  EffectiveDistanceOptions options;
-  options.normals.plan_sample = 600;   // below the pixel count: a stride sample
-  options.normals.model_sample = 200;  // the choice's cost, which dominates here
-  const EffectiveDistanceResult whole = SolveEffectiveDistance(data, options);
-  ASSERT_TRUE(std::isfinite(whole.distance_px));
-  ASSERT_FALSE(whole.passes.empty());
-  // The lights are near: at the D chosen the surface's points predict held-out lights better than
-  // points placed by their normals (near::PositionCheck), by both fits.
-  ASSERT_FALSE(whole.position_checks.empty());
-  for (const PositionCheck& check : whole.position_checks) EXPECT_FALSE(check.refused);
-
-  for (int band_rows : {5, 40}) {
-    SCOPED_TRACE(band_rows);
-    solve::BandSource source;
-    source.width = data.width;
-    source.height = data.height;
-    source.masked_pixels = data.pixel_count();
-    source.read = [&](int y0, int y1, bool) { return Rows(data, y0, y1); };
-    const EffectiveDistanceResult banded =
-        SolveEffectiveDistanceInBands(source, band_rows, options);
-    EXPECT_EQ(banded.distance_px, whole.distance_px);
-    ASSERT_EQ(banded.position_checks.size(), whole.position_checks.size());
-    for (std::size_t i = 0; i < whole.position_checks.size(); ++i) {
-      EXPECT_EQ(banded.position_checks[i].gain, whole.position_checks[i].gain);
+  for (const double given : {0.0, 6 * s.radius / s.frame.pixel_size}) {
+    SCOPED_TRACE(given);
+    EffectiveDistanceOptions options;
+    options.distance_px = given;
+    options.normals.plan_sample = 600;   // below the pixel count: a stride sample
+    options.normals.model_sample = 200;  // the choice's cost, which dominates here
+    const EffectiveDistanceResult whole = SolveEffectiveDistance(data, options);
+    if (given > 0) {
+      ASSERT_FALSE(whole.passes.empty());
+    } else {
+      ASSERT_FALSE(whole.scored.empty());
+      ASSERT_FALSE(whole.position_checks.empty());  // a D was proposed and checked
     }
-    EXPECT_EQ(banded.passes.size(), whole.passes.size());
-    EXPECT_EQ(banded.normals.model, whole.normals.model);
-    EXPECT_EQ(banded.normals.shininess, whole.normals.shininess);
-    EXPECT_EQ(banded.normals.ks, whole.normals.ks);
-    ExpectSame(banded.normals.normals, whole.normals.normals, "normals");
-    ExpectSame(banded.normals.albedo, whole.normals.albedo, "albedo");
-    ExpectSame(banded.normals.specular, whole.normals.specular, "specular");
-    ExpectSame(banded.normals.residual, whole.normals.residual, "residual");
-    ExpectSame(banded.normals.model_map, whole.normals.model_map, "model map");
-    ExpectSame(banded.height, whole.height, "height");
+
+    for (int band_rows : {5, 40}) {
+      SCOPED_TRACE(band_rows);
+      solve::BandSource source;
+      source.width = data.width;
+      source.height = data.height;
+      source.masked_pixels = data.pixel_count();
+      source.read = [&](int y0, int y1, bool) { return Rows(data, y0, y1); };
+      const EffectiveDistanceResult banded =
+          SolveEffectiveDistanceInBands(source, band_rows, options);
+      EXPECT_EQ(banded.distance_px, whole.distance_px);
+      EXPECT_EQ(banded.centre_behind_px, whole.centre_behind_px);
+      ASSERT_EQ(banded.scored.size(), whole.scored.size());
+      for (std::size_t i = 0; i < whole.scored.size(); ++i) {
+        EXPECT_EQ(banded.scored[i].heldout_cost, whole.scored[i].heldout_cost);
+      }
+      ASSERT_EQ(banded.position_checks.size(), whole.position_checks.size());
+      for (std::size_t i = 0; i < whole.position_checks.size(); ++i) {
+        EXPECT_EQ(banded.position_checks[i].gain, whole.position_checks[i].gain);
+      }
+      EXPECT_EQ(banded.passes.size(), whole.passes.size());
+      EXPECT_EQ(banded.normals.model, whole.normals.model);
+      EXPECT_EQ(banded.normals.shininess, whole.normals.shininess);
+      EXPECT_EQ(banded.normals.ks, whole.normals.ks);
+      ExpectSame(banded.normals.normals, whole.normals.normals, "normals");
+      ExpectSame(banded.normals.albedo, whole.normals.albedo, "albedo");
+      ExpectSame(banded.normals.specular, whole.normals.specular, "specular");
+      ExpectSame(banded.normals.residual, whole.normals.residual, "residual");
+      ExpectSame(banded.normals.model_map, whole.normals.model_map, "model map");
+      ExpectSame(banded.height, whole.height, "height");
+    }
   }
 }
 
