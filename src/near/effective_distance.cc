@@ -139,9 +139,10 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
 
   // Its surface, heights in pixels round the image's centre, and the object's centre and size.
   const auto choice_start = Clock::now();
-  geometry::HeightMapFrame frame;  // orthographic, a pixel per unit
-  std::vector<double> depth = IntegratedDepth(
-      result.distant, data, frame, std::vector<double>(pixels, 0.0), o.min_cos, o.normals.threads);
+  DistanceSurface surface;  // orthographic, a pixel per unit
+  const geometry::HeightMapFrame& frame = surface.frame;
+  surface.depth = IntegratedDepth(result.distant, data, frame, std::vector<double>(pixels, 0.0),
+                                  o.min_cos, o.normals.threads);
   int col0 = data.width, col1 = 0, row0 = data.height, row1 = 0;
   for (int p : data.pixels) {
     col0 = std::min(col0, p % data.width), col1 = std::max(col1, p % data.width + 1);
@@ -154,10 +155,9 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
   // than at its centre), and a flat object's centroid is its centre. How far behind is chosen
   // with D by the same held-out tests, between the centroid and kDeepestRims (distance_choice.cc)
   // times the depth of the surface's rim below it (`relief`).
-  Vec3d centroid = Vec3d::Zero();
-  double relief = 0;
   {
-    const std::vector<Vec3d> points = SurfacePoints(data, frame, depth);
+    Vec3d& centroid = surface.centroid;
+    const std::vector<Vec3d> points = SurfacePoints(data, frame, surface.depth);
     std::vector<double> z;
     z.reserve(points.size());
     for (const Vec3d& x : points) centroid += x, z.push_back(x.z());
@@ -165,21 +165,15 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
     // The rim as the 1st percentile of the heights: one pixel's integration error is not a rim.
     auto rim = z.begin() + static_cast<std::ptrdiff_t>(z.size() / 100);
     std::nth_element(z.begin(), rim, z.end());
-    relief = std::max(0.0, centroid.z() - *rim);
+    surface.relief = std::max(0.0, centroid.z() - *rim);
   }
-  DistanceSurface surface;
-  surface.frame = frame;
-  surface.depth = depth;
-  surface.centroid = centroid;
-  surface.relief = relief;
   DistanceChoice choice = ChooseDistance(capture, plan, o, surface, result);
   const double distance = choice.distance, behind = choice.behind;
   std::optional<Proposed>& proposed = choice.proposed;
-  const auto centre_at = [&](double b) { return surface.CentreAt(b); };
   result.choice_seconds = SecondsSince(choice_start);
   result.distance_px = distance;
   result.centre_behind_px = std::isinf(distance) ? 0.0 : behind;
-  result.relief_px = relief;
+  result.relief_px = surface.relief;
   if (std::isinf(distance)) {
     finish_distant();
     result.seconds = SecondsSince(start);
@@ -193,8 +187,8 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
   // first near pass (a Lambertian one, made where the plan had the foil, is not the object's).
   const bool from_proposal =
       proposed && proposed->distance == distance && proposed->behind == behind && proposed->by_plan;
-  if (from_proposal) depth = std::move(proposed->depth);
-  PhotometricData near = NearData(LayoutOf(data), frame, depth, centre_at(behind), distance);
+  std::vector<double> depth = from_proposal ? std::move(proposed->depth) : std::move(surface.depth);
+  PhotometricData near = NearData(LayoutOf(data), frame, depth, surface.CentreAt(behind), distance);
   std::vector<Vec3d> starts;
   {
     const std::vector<Vec3d> all =

@@ -15,10 +15,11 @@ double DepthOf(const Vec3d& point);
 double MeanChangeDeg(const solve::NormalResult& a, const solve::NormalResult& b,
                      const solve::PhotometricData& data);
 // How far the point lights of `data` moved as seen from each pixel when its point goes from
-// data.points_cam to `points`: the larger over the lights of the angle between the two directions
-// toward it plus |ln| of the ratio of its two irradiances (radians; π/2 where a light goes dark
-// or lit), the mean over (up to 2000 of) the pixels, in degrees. A pixel's fit moves its normal by about as much
-// as its lights move (all of them turned by an angle turn it by that angle).
+// data.points_cam to `points` (as many; std::invalid_argument otherwise): the larger over the
+// lights of the angle between the two directions toward it plus |ln| of the ratio of its two
+// irradiances (radians; π/2 where a light goes dark or lit), the mean over (up to 2000 of) the
+// pixels, in degrees; 0 without point lights. A pixel's fit moves its normal by about as much as
+// its lights move (all of them turned by an angle turn it by that angle).
 double LightsMovedDeg(const solve::PhotometricData& data, const std::vector<Vec3d>& points);
 // A result's unit normal per pixel of data (masked order); (0, 0, 1) where it has none.
 std::vector<Vec3d> NormalsPerPixel(const solve::NormalResult& r,

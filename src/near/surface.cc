@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "core/parallel.h"
 #include "integrate/integrate.h"
@@ -38,9 +39,11 @@ double MeanChangeDeg(const solve::NormalResult& a, const solve::NormalResult& b,
 }
 
 double LightsMovedDeg(const solve::PhotometricData& data, const std::vector<Vec3d>& points) {
-  if (data.point_lights.empty() || points.size() != data.points_cam.size() || points.empty()) {
-    return 0.0;
+  if (points.size() != data.points_cam.size()) {
+    throw std::invalid_argument("LightsMovedDeg: " + std::to_string(points.size()) +
+                                " points for " + std::to_string(data.points_cam.size()));
   }
+  if (data.point_lights.empty() || points.empty()) return 0.0;  // distant lights do not move
   // A mean to a few per cent: pixels spread over the object, not all of them (each costs two
   // looks at every light).
   const std::vector<std::size_t> spread = solve::SpreadIndices(points.size(), 2000);

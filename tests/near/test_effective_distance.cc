@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 
 #include "near/effective_distance.h"
 #include "near/internal.h"
@@ -197,6 +198,7 @@ TEST(EffectiveDistance, LightsMovedInClosedForm) {
               std::max(2 * std::log(r / (r - t)), 2 * std::log((r + t) / r)) * deg, 1e-9);
   EXPECT_NEAR(internal::LightsMovedDeg(data, {Vec3d(0, 0, 2 * r + 1)}), 90, 1e-9);
   EXPECT_EQ(internal::LightsMovedDeg(data, {Vec3d(0, 0, r)}), 0);
+  EXPECT_THROW(internal::LightsMovedDeg(data, {}), std::invalid_argument);
 }
 
 // The near passes stop once the lights, as the new surface's points see them, moved by less than
