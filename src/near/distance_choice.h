@@ -8,6 +8,7 @@
 
 #include "geometry/height_map.h"
 #include "near/effective_distance.h"
+#include "near/near.h"
 
 namespace iphong::near::internal {
 
@@ -38,14 +39,25 @@ struct DistanceSurface {
 };
 
 // The surface a proposal makes — every pixel refined from its distant normal under the
-// proposal's lights, integrated — on which the positions are checked, kept for the near passes
-// to start from.
+// proposal's lights, integrated — on which the positions are checked. Made by the plan chosen
+// again at those lights (`plan`), it is the first near pass, and the passes go on from it.
 struct Proposed {
   double distance = 0, behind = 0;
-  bool by_plan = false;  // refined by the plan's own model
+  std::optional<solve::NormalPlan> plan;  // absent: made by the diffuse test's model (a foil plan)
+  NearPass pass;                          // the refinement, as a near pass
   solve::NormalResult normals;
   std::vector<double> depth;
 };
+
+// The plan chosen again (warm: from `from`'s normals on the plan's sample) under the lights and
+// points of `near` (every pixel of the capture); not weighed by N·L at a distance the images
+// chose (effective_distance.cc says why). With `refit_starts`, the normals the choice starts from
+// are first refitted by `plan` under those lights (`from` was fitted under other lights). Without
+// a model to choose, the plan. Logs the choice.
+solve::NormalPlan PlanAtLights(const DistanceCapture& capture, const solve::NormalPlan& plan,
+                               const EffectiveDistanceOptions& o, bool chosen,
+                               const solve::PhotometricData& near, const solve::NormalResult& from,
+                               bool refit_starts);
 
 struct DistanceChoice {
   double distance = 0;               // pixels; infinity: distant lights

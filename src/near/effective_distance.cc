@@ -183,50 +183,44 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
   // The near passes: the model chosen again with these lights (warm), then every pixel refined
   // from its last normal, the surface integrated, until the normals settle. `near` holds the
   // lights and points; the observations stay with the capture.
-  // From the surface the chosen proposal made, where the object's model made it: that was the
-  // first near pass (a Lambertian one, made where the plan had the foil, is not the object's).
-  const bool from_proposal =
-      proposed && proposed->distance == distance && proposed->behind == behind && proposed->by_plan;
+  // The model is chosen again whichever test found the distance: a lobe chosen with distant
+  // lights may have been imitating the fall-off the distance now explains. Even where the
+  // object's model found D, its lobe still carried part of the fall-off (a Lambertian sphere
+  // under a dome, directions only: 7.68° with the distant choice's Phong lobe kept, 3.80° chosen
+  // again, its Lambert run 4.26°; DiLiGenT's ball 1.13° -> 1.12°).
+  // The surface the chosen proposal made with the model chosen so is the first pass (one made by
+  // the diffuse test's Lambert, where the plan had the foil, is not the object's). Where that
+  // pass moved the lights, the model is chosen once more under the lights of its surface, the
+  // passes' own: the distant surface a near dome's lights were first set round is bent, and a
+  // model chosen there carried it into every pass (numpy Phong spheres and ellipsoids under
+  // domes at 1.5 object sizes: 0.2–0.4° worse).
+  const bool from_proposal = proposed && proposed->distance == distance &&
+                             proposed->behind == behind && proposed->plan.has_value();
   std::vector<double> depth = from_proposal ? std::move(proposed->depth) : std::move(surface.depth);
   PhotometricData near = NearData(LayoutOf(data), frame, depth, surface.CentreAt(behind), distance);
-  std::vector<Vec3d> starts;
-  {
-    const std::vector<Vec3d> all =
-        NormalsPerPixel(from_proposal ? proposed->normals : result.distant, data);
-    for (std::size_t i : plan_sample) starts.push_back(all[i]);
-  }
-  // The model is chosen again (warm) with these lights, whichever test found the distance: a
-  // lobe chosen with distant lights may have been imitating the fall-off the distance now
-  // explains. Even where the object's model found D, its lobe still carried part of the fall-off
-  // (a Lambertian sphere under a dome, directions only: 7.68° with the distant choice's Phong
-  // lobe kept, 3.80° chosen again, its Lambert run 4.26°; DiLiGenT's ball 1.13° -> 1.12°).
-  // A distance chosen from the images is the explanation of the fall-off across the object that
-  // the unweighted fits above preferred; weights and offsets by N·L measured on top of it take
-  // the same fall-off on a second time (a matte (N·L)^1.3 sphere under distant lights, read as
-  // near: each alone is right, both together bend the normals). So at a chosen distance the fits
-  // are not weighed by N·L; at a distance the user gave, the misfit left there is the object's.
-  solve::NormalOptions near_options = o.normals;
-  if (result.chosen) near_options.weigh_by_shading = false;
-  const auto replan_start = Clock::now();
-  solve::NormalPlan near_plan = plan;
-  if (solve::NeedsPlanSample(o.normals)) {
-    PhotometricData sample = std::move(capture.observations({plan_sample})[0]);
-    sample.points_cam.clear();
-    for (std::size_t i : plan_sample) sample.points_cam.push_back(near.points_cam[i]);
-    WithLightsOf(sample, near);
-    near_plan = solve::PlanNormals(sample, near_options, &starts);
-  }  // else no model choice: the plan has no weights to drop
-  {
-    char line[200];
-    std::snprintf(line, sizeof line, "model chosen again with these lights: %s %.3g%s, %.2f s",
-                  reflectance::LobeName(near_plan.options.model).c_str(),
-                  near_plan.options.shininess,
-                  result.chosen && o.normals.weigh_by_shading ? " (not weighed by N.L)" : "",
-                  SecondsSince(replan_start));
-    say(line);
-  }
   solve::NormalResult last = from_proposal ? std::move(proposed->normals) : result.distant;
-  for (int pass = 0; pass < o.max_passes; ++pass) {
+  const auto settled = [&](const NearPass& record) {
+    char line[160];
+    std::snprintf(line, sizeof line,
+                  "near pass %zu: normals moved %.3f deg, lights %.3f deg, %.2f s",
+                  result.passes.size(), record.change_deg, record.lights_moved_deg, record.seconds);
+    say(line);
+    // Settled, or the next pass would see the lights this one fitted under (the normals moved
+    // because the model was chosen again, or the first pass left the distant lights).
+    return record.change_deg < o.tolerance_deg || record.lights_moved_deg < o.tolerance_deg;
+  };
+  bool done = false;
+  solve::NormalPlan near_plan;
+  if (from_proposal) {
+    result.passes.push_back(proposed->pass);
+    done = settled(proposed->pass);
+    near_plan = done || o.max_passes == 1
+                    ? std::move(*proposed->plan)
+                    : PlanAtLights(capture, plan, o, result.chosen, near, last, false);
+  } else {
+    near_plan = PlanAtLights(capture, plan, o, result.chosen, near, result.distant, false);
+  }
+  while (!done && static_cast<int>(result.passes.size()) < o.max_passes) {
     const auto pass_start = Clock::now();
     solve::NormalResult now = capture.refine(near, near_plan, last);
     NearPass record;
@@ -241,14 +235,7 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
     record.seconds = SecondsSince(pass_start);
     result.passes.push_back(record);
     last = std::move(now);
-    char line[160];
-    std::snprintf(line, sizeof line,
-                  "near pass %d: normals moved %.3f deg, lights %.3f deg, %.2f s", pass + 1,
-                  record.change_deg, record.lights_moved_deg, record.seconds);
-    say(line);
-    // Settled, or the next pass would see the lights this one fitted under (the normals moved
-    // because the model was chosen again, or the first pass left the distant lights).
-    if (record.change_deg < o.tolerance_deg || record.lights_moved_deg < o.tolerance_deg) break;
+    done = settled(record);
   }
   if (solve::NeedsPlanSample(o.normals)) {
     std::vector<Vec3f> sample_ks;

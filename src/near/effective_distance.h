@@ -22,8 +22,10 @@
 // only where, on the surface it makes (every pixel refined under its lights and integrated), the
 // surface's points predict better than points placed by their normals (PositionCheck): near
 // lights act by where points are, a fit's misfit by which way they face.
-// With a finite D the model is chosen again (warm) with its lights, and the loop refines every
-// pixel from its distant normal, integrating and refining until the normals settle. At D = ∞
+// With a finite D the model is chosen again (warm) with its lights: the surface the standing
+// proposal made with it is the first pass (the model chosen once more where that pass moved the
+// lights), and the loop refines every pixel from its last normal, integrating and refining until
+// the normals or the lights settle. At D = ∞
 // (chosen or given) with the foil kept, every pixel is refitted with the foil from its distant
 // normal, the per-pixel test's choice undone (foil_refit).
 #pragma once

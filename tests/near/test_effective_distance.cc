@@ -46,7 +46,20 @@ void ExpectSame(const ImageF& banded, const ImageF& whole, const char* what) {
   }
 }
 
-// A glossy sphere under a dome of 24 lights at 3 object sizes, seen orthographically and read
+// A matte sphere 36 pixels wide, seen orthographically, under a dome of 24 lights `sizes` object
+// sizes away, their intensity scaled to light it alike at every distance.
+NearScene SphereUnderDome(double sizes) {
+  NearScene s;
+  s.width = 44;
+  s.height = 40;
+  s.frame.perspective = false;
+  s.frame.pixel_size = 2.8;  // mm: the sphere is 36 pixels wide
+  s.lights = Dome(s.center, sizes * 2 * s.radius, 24, 2e4 * std::pow(2 * sizes / 3, 2));
+  s.material.kd = Vec3d(0.7, 0.6, 0.5);
+  return s;
+}
+
+// A matte sphere under a dome of 24 lights at 3 object sizes, seen orthographically and read
 // with directions only (the case the effective distance is for), D chosen and D given: the
 // choice's candidates and checks, the passes and every map are the same in bands as whole.
 // Whether the choice keeps its D here is the position check's known tie on a sphere (points
@@ -54,13 +67,7 @@ void ExpectSame(const ImageF& banded, const ImageF& whole, const char* what) {
 // error it refuses 107 px by 5.3 standard errors of a difference of 0.001 against a gain of 9.7
 // (docs/guides/near-lights.md); at the D given the passes run either way.
 TEST(EffectiveDistance, InBandsEqualsTheWholeBitForBit) {
-  NearScene s;
-  s.width = 44;
-  s.height = 40;
-  s.frame.perspective = false;
-  s.frame.pixel_size = 2.8;  // mm: the sphere is 36 pixels wide
-  s.lights = Dome(s.center, 6 * s.radius, 24, 2e4 * 4);
-  s.material.kd = Vec3d(0.7, 0.6, 0.5);
+  const NearScene s = SphereUnderDome(3);
   solve::PhotometricData data = RenderNearSphere(s).data;
   data.point_lights.clear();  // directions only
   data.perspective = false;
@@ -210,13 +217,7 @@ TEST(EffectiveDistance, LightsMovedInClosedForm) {
 TEST(EffectiveDistance, PassesStopOnceTheLightsStandStill) {
   for (const double sizes : {12.0, 1.5}) {
     SCOPED_TRACE(sizes);
-    NearScene s;
-    s.width = 44;
-    s.height = 40;
-    s.frame.perspective = false;
-    s.frame.pixel_size = 2.8;  // mm: the sphere is 36 pixels wide
-    s.lights = Dome(s.center, sizes * 2 * s.radius, 24, 2e4 * std::pow(2 * sizes / 3, 2));
-    s.material.kd = Vec3d(0.7, 0.6, 0.5);
+    const NearScene s = SphereUnderDome(sizes);
     const NearCapture capture = RenderNearSphere(s);
     solve::PhotometricData data = capture.data;
     data.point_lights.clear();  // directions only
@@ -249,6 +250,78 @@ TEST(EffectiveDistance, PassesStopOnceTheLightsStandStill) {
     std::printf("  after three passes %.3f deg off\n", error_more);
     EXPECT_NEAR(error, error_more, 0.01);
   }
+}
+
+// A proposal that stands made its surface with the model chosen again under its lights: that
+// refinement of every pixel is the first near pass, not a step before the passes. Counted through
+// the capture's refine: one per proposal checked, plus one per pass after the first (before, one
+// per pass as well). A Phong sphere under a dome of 24 lights at 3 object sizes, read with
+// directions only: D = 132 px stands (107 true), one proposal, two passes.
+TEST(EffectiveDistance, AnAcceptedProposalIsTheFirstPass) {
+  NearScene s = SphereUnderDome(3);
+  s.material.ks = Vec3d(0.4, 0.4, 0.4);
+  s.material.shininess = 30;
+  const NearCapture scene = RenderNearSphere(s);
+  solve::PhotometricData data = scene.data;
+  data.point_lights.clear();  // directions only
+  data.perspective = false;
+  EffectiveDistanceOptions options;
+  options.normals.plan_sample = 600;
+  options.normals.model_sample = 200;
+  // Phong asked for: left to choose, this sphere takes the foil, whose proposals are made by the
+  // diffuse test's Lambert instead.
+  options.normals.model = reflectance::Lobe::kPhong;
+  options.normals.choose_model = false;
+
+  // SolveEffectiveDistance's steps, its capture's refinements counted.
+  const std::vector<std::size_t> plan_sample =
+      solve::PlanSampleIndices(data.pixel_count(), options.normals.plan_sample);
+  const solve::NormalPlan plan =
+      solve::PlanNormals(solve::SubsetObservations(data, plan_sample), options.normals);
+  ASSERT_NE(plan.options.model, reflectance::Lobe::kNormalCentred) << "a foil plan: no first pass";
+  solve::NormalResult distant = solve::SolveNormalsWithPlan(data, plan);
+  {
+    std::vector<Vec3f> sample_ks;
+    solve::AppendSampleSpecular(distant, data, plan_sample, sample_ks);
+    solve::FinishNormals(distant, plan, sample_ks);
+  }
+  int refinements = 0;
+  DistanceCapture capture;
+  capture.layout = &data;
+  capture.observations = [&](const std::vector<std::vector<std::size_t>>& sets) {
+    std::vector<solve::PhotometricData> out;
+    for (const auto& indices : sets) out.push_back(solve::SubsetObservations(data, indices));
+    return out;
+  };
+  capture.refine = [&](const solve::PhotometricData& lights, const solve::NormalPlan& by,
+                       const solve::NormalResult& previous) {
+    ++refinements;
+    solve::PhotometricData with = data;
+    with.point_lights = lights.point_lights;
+    with.light_directions = lights.light_directions;
+    with.light_intensities = lights.light_intensities;
+    with.points_cam = lights.points_cam;
+    return solve::RefineNormalsWithPlan(with, by, previous);
+  };
+  const EffectiveDistanceResult r = ContinueEffectiveDistance(capture, plan, distant, options);
+  ASSERT_TRUE(std::isfinite(r.distance_px)) << "no D stood: nothing to count";
+  ASSERT_FALSE(r.passes.empty());
+  std::vector<double> proposals;
+  for (const PositionCheck& c : r.position_checks) {
+    if (std::find(proposals.begin(), proposals.end(), c.distance_px) == proposals.end()) {
+      proposals.push_back(c.distance_px);
+    }
+  }
+  std::printf("D %.1f px, %zu proposal(s), %zu pass(es), %d refinements; %.3f deg off\n",
+              r.distance_px, proposals.size(), r.passes.size(), refinements,
+              MeanErrorDeg(r.normals, scene.normal_gt));
+  EXPECT_EQ(refinements, static_cast<int>(proposals.size() + r.passes.size()) - 1);
+  EXPECT_EQ(r.passes[0].distance, r.distance_px);
+  // The same steps as the library's own capture, bit for bit.
+  const EffectiveDistanceResult library = SolveEffectiveDistance(data, options);
+  EXPECT_EQ(library.distance_px, r.distance_px);
+  EXPECT_EQ(library.passes.size(), r.passes.size());
+  ExpectSame(library.normals.normals, r.normals.normals, "normals");
 }
 
 }  // namespace
