@@ -175,6 +175,17 @@ TEST(Normals, TruncatedIntegerCodesAreTakenAtTheirMiddle) {
   NormalPlan plan = PlanNormals(truncated, NormalOptions{});
   EXPECT_DOUBLE_EQ(plan.model_choice.code_step, 1 / 255.0);
   EXPECT_DOUBLE_EQ(plan.options.code_offset, 0.5 / 255);
+  // The second reading is scored at the first's best of each lobe, not over the whole grid.
+  const std::vector<ModelCandidate> grid = ModelFamily(std::nullopt);
+  int grid_as_recorded = 0, grid_at_middle = 0;
+  for (const ModelCandidate& m : plan.model_choice.scored) {
+    const bool on_grid = std::any_of(grid.begin(), grid.end(), [&](const ModelCandidate& g) {
+      return g.lobe == m.lobe && g.shininess == m.shininess && m.ks_prior_weight == 0;
+    });
+    if (on_grid) ++(m.code_offset == 0 ? grid_as_recorded : grid_at_middle);
+  }
+  EXPECT_GE(grid_as_recorded, 13);  // Lambert and six of each mirror lobe
+  EXPECT_LE(grid_at_middle, 4);     // Lambert and one of each lobe
   EXPECT_EQ(PlanNormals(quantized(false), NormalOptions{}).options.code_offset, 0.0);
   // With the model the plan chose, against the same codes taken as they are.
   const auto error = [&](const NormalPlan& p) {
