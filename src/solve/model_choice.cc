@@ -324,9 +324,7 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
       std::optional<std::size_t> best;
       for (std::size_t i = 0; i < end; ++i) {
         const ModelCandidate& m = choice.scored[i];
-        if (complete[i] && m.lobe == lobe &&
-            (!variant ||
-             (m.ambient_term == variant->ambient_term && m.code_offset == variant->code_offset)) &&
+        if (complete[i] && m.lobe == lobe && (!variant || in_variant(m, *variant)) &&
             (!best || m.heldout_cost < choice.scored[*best].heldout_cost)) {
           best = i;
         }
@@ -361,7 +359,7 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
     // as recorded because the grid's best was in that reading, 1.21° against 0.8° at their middle).
     const ModelCandidate refined = choice.scored[*best_of(choice.scored.size(), &start)];
     for (const ModelCandidate& v : variants) {
-      if (v.ambient_term == refined.ambient_term && v.code_offset == refined.code_offset) continue;
+      if (in_variant(refined, v)) continue;
       ModelCandidate m = refined;
       m.ambient_term = v.ambient_term;
       m.code_offset = v.code_offset;
