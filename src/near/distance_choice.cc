@@ -140,8 +140,7 @@ solve::NormalPlan PlanAtLights(const DistanceCapture& capture, const solve::Norm
     // 12 lights: from the distant normals 7.07°, refitted 6.82°).
     const std::vector<std::size_t> spread =
         solve::SpreadIndices(plan_sample.size(), o.normals.model_sample);
-    PhotometricData few = solve::SubsetObservations(sample, spread);
-    WithLightsOf(few, near);
+    const PhotometricData few = solve::SubsetObservations(sample, spread);  // its lights, points
     solve::NormalPlan by = plan;
     if (chosen) by.options.shading_weights = {};
     const std::vector<Vec3d> refitted =
