@@ -181,7 +181,8 @@ nlohmann::json EffectiveDistanceJson(const near::EffectiveDistanceResult& r) {
   }
   nlohmann::json passes = nlohmann::json::array();
   for (const near::NearPass& p : r.passes) {
-    passes.push_back({{"normals_moved_deg", p.change_deg},
+    passes.push_back({{"light_distance_px", p.distance},
+                      {"normals_moved_deg", p.change_deg},
                       {"lights_moved_deg", p.lights_moved_deg},
                       {"seconds", p.seconds}});
   }

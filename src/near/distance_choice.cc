@@ -60,20 +60,6 @@ void WithLightsOf(PhotometricData& data, const PhotometricData& from) {
 
 namespace {
 
-// Candidates for D, in the object's sizes (the mask's larger side): far enough apart that the
-// grid's neighbours bracket the best, from 1.5 sizes (a dome round a large object) to 32. Beyond
-// that a light's direction turns by under 1.8° across the object and its irradiance changes by
-// under ±6 %, under what a photograph's normals are good to: there the held-out tests' "gains"
-// were model misfit, not nearness (a distant render with an ambient term chose 92 object sizes by
-// 0.3 % of its cost, beyond three standard errors). The refinement goes down to one size, where
-// a light is half a size from the surface of the object round its centre.
-constexpr double kDistanceGrid[] = {1.5, 2, 3, 4, 6, 8, 12, 16, 24, 32};
-constexpr double kNearestSizes = 1.0;
-// How far behind the surface's centroid the centre may be, in depths of its rim below the
-// centroid: a sphere's centre is at its rim's depth, and the rim of a surface integrated from
-// distant normals came out up to 30 % shallower than it is (a dome at 1.5 object sizes).
-constexpr double kDeepestRims = 2.0;
-
 // Points placed by their normals alone: X ≈ a + s·N fitted to `points` by least squares (on a
 // sphere the surface itself; a flat object's normals are all alike: every point at the
 // centroid, lights alike across it).
@@ -94,6 +80,8 @@ std::vector<Vec3d> PlacedByNormals(const std::vector<Vec3d>& points,
   return out;
 }
 
+}  // namespace
+
 // The held-out model of a plan: the chosen one, or what it was given (Lambert, known
 // coefficients).
 solve::ModelCandidate PlanModel(const solve::NormalPlan& plan) {
@@ -105,8 +93,6 @@ solve::ModelCandidate PlanModel(const solve::NormalPlan& plan) {
   m.code_offset = plan.options.code_offset;
   return m;
 }
-
-}  // namespace
 
 solve::NormalPlan PlanAtLights(const DistanceCapture& capture, const solve::NormalPlan& plan,
                                const EffectiveDistanceOptions& o, bool chosen,

@@ -25,6 +25,20 @@ solve::PhotometricData LayoutOf(const solve::PhotometricData& data);
 // its points, when it holds every pixel `from` holds.
 void WithLightsOf(solve::PhotometricData& data, const solve::PhotometricData& from);
 
+// Candidates for D, in the object's sizes (the mask's larger side): far enough apart that the
+// grid's neighbours bracket the best, from 1.5 sizes (a dome round a large object) to 32. Beyond
+// that a light's direction turns by under 1.8° across the object and its irradiance changes by
+// under ±6 %, under what a photograph's normals are good to: there the held-out tests' "gains"
+// were model misfit, not nearness (a distant render with an ambient term chose 92 object sizes by
+// 0.3 % of its cost, beyond three standard errors). The refinement goes down to one size, where
+// a light is half a size from the surface of the object round its centre.
+inline constexpr double kDistanceGrid[] = {1.5, 2, 3, 4, 6, 8, 12, 16, 24, 32};
+inline constexpr double kNearestSizes = 1.0;
+// How far behind the surface's centroid the centre may be, in depths of its rim below the
+// centroid: a sphere's centre is at its rim's depth, and the rim of a surface integrated from
+// distant normals came out up to 30 % shallower than it is (a dome at 1.5 object sizes).
+inline constexpr double kDeepestRims = 2.0;
+
 // The distant solve's surface, orthographic with a pixel per unit (depth = −height, per masked
 // pixel), its centroid and the depth of its rim below the centroid (`relief`, pixels).
 struct DistanceSurface {
@@ -59,6 +73,10 @@ solve::NormalPlan PlanAtLights(const DistanceCapture& capture, const solve::Norm
                                const solve::PhotometricData& near, const solve::NormalResult& from,
                                bool refit_starts);
 
+// The held-out model of a plan: the chosen one, or what it was given (Lambert, known
+// coefficients).
+solve::ModelCandidate PlanModel(const solve::NormalPlan& plan);
+
 struct DistanceChoice {
   double distance = 0;               // pixels; infinity: distant lights
   double behind = 0;                 // the centre's depth behind the centroid, pixels
@@ -71,5 +89,26 @@ struct DistanceChoice {
 DistanceChoice ChooseDistance(const DistanceCapture& capture, const solve::NormalPlan& plan,
                               const EffectiveDistanceOptions& o, const DistanceSurface& surface,
                               EffectiveDistanceResult& result);
+
+// D and the centre's depth chosen again round (distance, behind) on a near pass's surface
+// (`depth`, its normals `from`), by the test that chose them (the diffuse one with `diffuse`, else
+// the object's model: `plan`'s, chosen under the pass's lights) on the model choice's pixels. The
+// first choice was made on the surface the distant solve integrated, whose normals the near
+// lights' fall-off bent, and the lights set round a bent surface are set too far (numpy spheres
+// under a dome at 2.5 object sizes, directions only: D 567 px chosen for 350, then 406 on the
+// first passes' surface). A simplex in (ln D, behind) from the first choice; the centre stays
+// measured from `surface`'s centroid. Records each candidate in `result` (criterion "... on the
+// near surface") and returns the best one scored where it predicts better than the start.
+struct RefinedDistance {
+  double distance = 0, behind = 0;
+  // The start's held-out cost less the best's (t² per pixel) and its paired standard error; the
+  // start is returned unless the gain exceeds the error.
+  double gain = 0, gain_error = 0;
+};
+RefinedDistance RefineDistance(const DistanceCapture& capture, const solve::NormalPlan& plan,
+                               const EffectiveDistanceOptions& o, const DistanceSurface& surface,
+                               const std::vector<double>& depth, const solve::NormalResult& from,
+                               bool diffuse, double distance, double behind,
+                               EffectiveDistanceResult& result);
 
 }  // namespace iphong::near::internal

@@ -27,6 +27,7 @@ std::string EffectiveDistanceOptions::Validate() const {
   if (!(distance_px >= 0) || std::isnan(distance_px)) return "distance must be >= 0 (or inf)";
   if (max_passes < 1 || max_passes > 100) return "passes must be in 1..100";
   if (!(tolerance_deg > 0) || !std::isfinite(tolerance_deg)) return "tolerance must be > 0";
+  if (distance_rounds < 0 || distance_rounds > 10) return "distance rounds must be in 0..10";
   if (!(min_cos > 0 && min_cos < 1)) return "min_cos must be in (0, 1)";
   return "";
 }
@@ -168,7 +169,7 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
     surface.relief = std::max(0.0, centroid.z() - *rim);
   }
   DistanceChoice choice = ChooseDistance(capture, plan, o, surface, result);
-  const double distance = choice.distance, behind = choice.behind;
+  double distance = choice.distance, behind = choice.behind;
   std::optional<Proposed>& proposed = choice.proposed;
   result.choice_seconds = SecondsSince(choice_start);
   result.distance_px = distance;
@@ -220,23 +221,51 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
   } else {
     near_plan = PlanAtLights(capture, plan, o, result.chosen, near, result.distant, false);
   }
-  while (!done && static_cast<int>(result.passes.size()) < o.max_passes) {
-    const auto pass_start = Clock::now();
-    solve::NormalResult now = capture.refine(near, near_plan, last);
-    NearPass record;
-    record.kind = "refine";
-    record.change_deg = MeanChangeDeg(last, now, near);
-    depth = IntegratedDepth(now, near, frame, std::vector<double>(pixels, 0.0), o.min_cos,
-                            o.normals.threads);
-    std::vector<Vec3d> points = SurfacePoints(near, frame, depth);
-    record.lights_moved_deg = LightsMovedDeg(near, points);
-    near.points_cam = std::move(points);
-    record.distance = distance;
-    record.seconds = SecondsSince(pass_start);
-    result.passes.push_back(record);
-    last = std::move(now);
-    done = settled(record);
+  const auto passes = [&](std::size_t before) {
+    while (!done && static_cast<int>(result.passes.size() - before) < o.max_passes) {
+      const auto pass_start = Clock::now();
+      solve::NormalResult now = capture.refine(near, near_plan, last);
+      NearPass record;
+      record.kind = "refine";
+      record.change_deg = MeanChangeDeg(last, now, near);
+      depth = IntegratedDepth(now, near, frame, std::vector<double>(pixels, 0.0), o.min_cos,
+                              o.normals.threads);
+      std::vector<Vec3d> points = SurfacePoints(near, frame, depth);
+      record.lights_moved_deg = LightsMovedDeg(near, points);
+      near.points_cam = std::move(points);
+      record.distance = distance;
+      record.seconds = SecondsSince(pass_start);
+      result.passes.push_back(record);
+      last = std::move(now);
+      done = settled(record);
+    }
+  };
+  passes(0);
+  // D and the centre chosen again on the surface the passes made, and the passes again under
+  // their lights, until the lights stay within the tolerance (RefineDistance says why).
+  for (int round = 0; round < o.distance_rounds && result.chosen; ++round) {
+    const RefinedDistance refined =
+        RefineDistance(capture, near_plan, o, surface, depth, last, result.criterion == "diffuse",
+                       distance, behind, result);
+    if (refined.distance == distance && refined.behind == behind) break;  // the first stands
+    PhotometricData moved =
+        NearData(LayoutOf(data), frame, depth, surface.CentreAt(refined.behind), refined.distance);
+    const double change = LightsChangedDeg(near, moved);
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "D %.4g px, the centre %.3g px behind: the lights move %.3f deg",
+                  refined.distance, refined.behind, change);
+    say(line);
+    if (change < o.tolerance_deg) break;
+    distance = refined.distance;
+    behind = refined.behind;
+    near = std::move(moved);
+    near_plan = PlanAtLights(capture, plan, o, result.chosen, near, last, false);
+    done = false;
+    passes(result.passes.size());
   }
+  result.distance_px = distance;
+  result.centre_behind_px = behind;
   if (solve::NeedsPlanSample(o.normals)) {
     std::vector<Vec3f> sample_ks;
     solve::AppendSampleSpecular(last, near, plan_sample, sample_ks);

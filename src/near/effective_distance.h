@@ -45,7 +45,9 @@ struct DistanceCandidate {
   double centre_behind_px = 0;  // the lights' centre: this far behind the surface's centroid
   double heldout_cost = 0;      // mean per pixel, in units of each pixel's t²
   double heldout_error = 0;     // its standard error
-  std::string criterion;        // "model" (the plan's) or "diffuse" (Lambert, highlights censored)
+  // "model" (the plan's) or "diffuse" (Lambert, highlights censored); the position checks' and
+  // the rounds' candidates say so after a comma ("model, again on the near surface").
+  std::string criterion;
 };
 
 // Nearness is a property of where the surface's points are. At the distance a test proposes,
@@ -81,6 +83,11 @@ struct EffectiveDistanceOptions {
   // is under any photograph's accuracy.
   int max_passes = 3;
   double tolerance_deg = 0.1;
+  // A chosen D and its centre are chosen again this many times at most on the surface the
+  // passes made (internal::RefineDistance: the first choice, on the distant solve's surface,
+  // sets the lights too far), each followed by passes under the new lights; they stop once the
+  // new D moves the lights by less than tolerance_deg. 0: the first choice stands.
+  int distance_rounds = 1;
   double min_cos = 0.05;  // integration's grazing guard
   std::function<void(const std::string&)> log;
 
@@ -96,9 +103,10 @@ struct EffectiveDistanceResult {
   // D = ∞); and how far that surface's rim (its heights' 1st percentile) is behind the centroid.
   double centre_behind_px = 0;
   double relief_px = 0;
-  std::vector<DistanceCandidate> scored;  // D = ∞ first, then the grid, then the refinement
-  // Held-out cost at D = ∞ less at the chosen D (t² per pixel) and its paired standard error,
-  // by the test that chose it ("model" or "diffuse"; "" for D = ∞).
+  std::vector<DistanceCandidate> scored;  // D = ∞ first, the grid, the refinement, the rounds
+  // Held-out cost at D = ∞ less at the D first chosen (t² per pixel) and its paired standard
+  // error, by the test that chose it ("model" or "diffuse"; "" for D = ∞); a round's gain over
+  // that D is in `scored` ("…, again on the near surface").
   double gain = 0, gain_error = 0;
   std::string criterion;
   // Where the diffuse test proposed a D: the object's model's held-out loss there over D = ∞ and

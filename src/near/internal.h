@@ -21,6 +21,10 @@ double MeanChangeDeg(const solve::NormalResult& a, const solve::NormalResult& b,
 // pixels, in degrees; 0 without point lights. A pixel's fit moves its normal by about as much as
 // its lights move (all of them turned by an angle turn it by that angle).
 double LightsMovedDeg(const solve::PhotometricData& data, const std::vector<Vec3d>& points);
+// The same measure between two sets of point lights, each seen from its own points (as many
+// lights and points in both; std::invalid_argument otherwise): how far a new D and centre move
+// the lights as the pixels see them. 0 without point lights.
+double LightsChangedDeg(const solve::PhotometricData& a, const solve::PhotometricData& b);
 // A result's unit normal per pixel of data (masked order); (0, 0, 1) where it has none.
 std::vector<Vec3d> NormalsPerPixel(const solve::NormalResult& r,
                                    const solve::PhotometricData& data);

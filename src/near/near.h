@@ -78,7 +78,9 @@ struct NearPass {
   // How far the lights moved as the pass's new surface sees them (internal::LightsMovedDeg;
   // effective distance's passes only, else 0).
   double lights_moved_deg = 0;
-  double distance = 0;  // the surface's mean distance along the axis after the pass
+  // The surface's mean distance along the axis after the pass; an effective distance's passes:
+  // the D (pixels) they ran at.
+  double distance = 0;
   double seconds = 0;
 };
 

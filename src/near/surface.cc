@@ -38,22 +38,25 @@ double MeanChangeDeg(const solve::NormalResult& a, const solve::NormalResult& b,
   return n ? sum / n : 0.0;
 }
 
-double LightsMovedDeg(const solve::PhotometricData& data, const std::vector<Vec3d>& points) {
-  if (points.size() != data.points_cam.size()) {
-    throw std::invalid_argument("LightsMovedDeg: " + std::to_string(points.size()) +
-                                " points for " + std::to_string(data.points_cam.size()));
-  }
-  if (data.point_lights.empty() || points.empty()) return 0.0;  // distant lights do not move
+namespace {
+
+// The mean over (up to 2000 of) the pixels of the larger over the lights of the turn of the
+// direction toward light j plus |ln| of its irradiance ratio, from lights0 seen from points0 to
+// lights1 seen from points1 (degrees).
+double LightsChange(const std::vector<reflectance::Light>& lights0,
+                    const std::vector<Vec3d>& points0,
+                    const std::vector<reflectance::Light>& lights1,
+                    const std::vector<Vec3d>& points1) {
   // A mean to a few per cent: pixels spread over the object, not all of them (each costs two
   // looks at every light).
-  const std::vector<std::size_t> spread = solve::SpreadIndices(points.size(), 2000);
+  const std::vector<std::size_t> spread = solve::SpreadIndices(points0.size(), 2000);
   double sum = 0;
   for (const std::size_t i : spread) {
     double largest = 0;
-    for (const reflectance::Light& light : data.point_lights) {
+    for (std::size_t j = 0; j < lights0.size(); ++j) {
       Vec3d l0, l1, e0, e1, unused;
-      const bool seen0 = reflectance::LightAt(light, data.points_cam[i], &l0, &e0, &unused);
-      const bool seen1 = reflectance::LightAt(light, points[i], &l1, &e1, &unused);
+      const bool seen0 = reflectance::LightAt(lights0[j], points0[i], &l0, &e0, &unused);
+      const bool seen1 = reflectance::LightAt(lights1[j], points1[i], &l1, &e1, &unused);
       const double a = seen0 ? e0.maxCoeff() : 0.0, b = seen1 ? e1.maxCoeff() : 0.0;
       if ((a > 0) != (b > 0)) {
         largest = std::max(largest, M_PI / 2);
@@ -65,6 +68,29 @@ double LightsMovedDeg(const solve::PhotometricData& data, const std::vector<Vec3
     sum += largest;
   }
   return sum / static_cast<double>(spread.size()) * 180 / M_PI;
+}
+
+}  // namespace
+
+double LightsMovedDeg(const solve::PhotometricData& data, const std::vector<Vec3d>& points) {
+  if (points.size() != data.points_cam.size()) {
+    throw std::invalid_argument("LightsMovedDeg: " + std::to_string(points.size()) +
+                                " points for " + std::to_string(data.points_cam.size()));
+  }
+  if (data.point_lights.empty() || points.empty()) return 0.0;  // distant lights do not move
+  return LightsChange(data.point_lights, data.points_cam, data.point_lights, points);
+}
+
+double LightsChangedDeg(const solve::PhotometricData& a, const solve::PhotometricData& b) {
+  if (a.points_cam.size() != b.points_cam.size() ||
+      a.point_lights.size() != b.point_lights.size()) {
+    throw std::invalid_argument("LightsChangedDeg: " + std::to_string(a.points_cam.size()) +
+                                " points and " + std::to_string(a.point_lights.size()) +
+                                " point lights against " + std::to_string(b.points_cam.size()) +
+                                " and " + std::to_string(b.point_lights.size()));
+  }
+  if (a.point_lights.empty() || a.points_cam.empty()) return 0.0;
+  return LightsChange(a.point_lights, a.points_cam, b.point_lights, b.points_cam);
 }
 
 std::vector<Vec3d> NormalsPerPixel(const solve::NormalResult& r,
