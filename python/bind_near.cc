@@ -98,10 +98,9 @@ py::dict DistanceDict(const near::EffectiveDistanceResult& r) {
   }
   py::list passes;
   for (const near::NearPass& p : r.passes) {
-    passes.append(py::dict(py::arg("light_distance_px") = p.distance,
-                           py::arg("normals_moved_deg") = p.change_deg,
-                           py::arg("lights_moved_deg") = p.lights_moved_deg,
-                           py::arg("seconds") = p.seconds));
+    passes.append(py::dict(
+        py::arg("light_distance_px") = p.distance, py::arg("normals_moved_deg") = p.change_deg,
+        py::arg("lights_moved_deg") = p.lights_moved_deg, py::arg("seconds") = p.seconds));
   }
   return py::dict(py::arg("distance_px") = r.distance_px, py::arg("chosen") = r.chosen,
                   py::arg("object_size_px") = r.object_size_px,
