@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <string>
 #include <tuple>
@@ -92,6 +93,42 @@ solve::ModelCandidate PlanModel(const solve::NormalPlan& plan) {
   m.ambient_term = plan.options.ambient_term;
   m.code_offset = plan.options.code_offset;
   return m;
+}
+
+std::pair<solve::ModelCandidate, solve::ModelChoiceSettings> DistanceTest(
+    const solve::NormalPlan& plan, const EffectiveDistanceOptions& o, bool diffuse,
+    const std::vector<Vec3d>* starts) {
+  std::pair<solve::ModelCandidate, solve::ModelChoiceSettings> out;
+  auto& [model, settings] = out;
+  model = PlanModel(plan);
+  settings.fit = solve::internal::FitSettingsOf(plan.options);
+  // The plan's weights by N·L were measured under distant lights: they weigh down the bands
+  // where distant lights misfit, which a finite distance may be what explains. Every candidate
+  // is fitted unweighted; the plan at the chosen distance measures its own.
+  settings.fit.shading_weights = {};
+  settings.sample = o.normals.model_sample;
+  settings.threads = o.normals.threads;
+  settings.starts = starts;
+  if (diffuse) solve::MakeDiffuseTest(model, settings);
+  return out;
+}
+
+void SearchDistanceAndCentre(std::vector<std::vector<double>> simplex, std::vector<double> costs,
+                             double relief, double object_size_px,
+                             const std::function<double(double, double)>& score) {
+  NelderMead(std::move(simplex), std::move(costs), {0.02, 0.05 * relief}, 30,
+             [&](const std::vector<double>& p) {
+               if (!InDistanceRange(p[0], p[1], relief, object_size_px)) {
+                 return std::numeric_limits<double>::infinity();
+               }
+               return score(std::exp(p[0]), p[1]);
+             });
+}
+
+bool InDistanceRange(double log_d, double behind, double relief, double object_size_px) {
+  return log_d >= std::log(kNearestSizes * object_size_px) &&
+         log_d <= std::log(kDistanceGrid[std::size(kDistanceGrid) - 1] * object_size_px) &&
+         behind >= 0 && behind <= kDeepestRims * relief;
 }
 
 solve::NormalPlan PlanAtLights(const DistanceCapture& capture, const solve::NormalPlan& plan,
@@ -204,27 +241,20 @@ DistanceChoice ChooseDistance(const DistanceCapture& capture, const solve::Norma
     };
     for (const bool diffuse : {false, true}) {
       Test& test = tests[diffuse];
-      test.model = PlanModel(plan);
-      test.settings.fit = solve::internal::FitSettingsOf(plan.options);
-      // The plan's weights by N·L were measured under distant lights: they weigh down the bands
-      // where distant lights misfit, which a finite distance may be what explains. Every candidate
-      // is fitted unweighted; the plan at the chosen distance measures its own.
-      test.settings.fit.shading_weights = {};
-      test.settings.sample = o.normals.model_sample;
-      test.settings.threads = o.normals.threads;
-      test.settings.starts = &starts;
-      if (diffuse) {
-        solve::MakeDiffuseTest(test.model, test.settings);
-      } else if (!choose || test.model.lobe == reflectance::Lobe::kLambert) {
-        continue;  // the same test as the diffuse one, less robust
-      } else if (test.model.lobe == reflectance::Lobe::kNormalCentred) {
-        // The foil (model_choice.h) is a brightening that follows the normal, which is what a
-        // fall-off looks like from one pixel: chosen under distant lights it has taken the
-        // fall-off in and would lose at any finite D, so it cannot judge one. The diffuse test
-        // and the position check decide; at a D chosen the model is chosen again (warm) with
-        // its lights, the foil among the candidates.
-        continue;
+      if (!diffuse) {
+        const reflectance::Lobe lobe = PlanModel(plan).lobe;
+        // Lambert's own test is the diffuse one, more robust. The foil (model_choice.h) is a
+        // brightening that follows the normal, which is what a fall-off looks like from one
+        // pixel: chosen under distant lights it has taken the fall-off in and would lose at any
+        // finite D, so it cannot judge one. The diffuse test and the position check decide; at
+        // a D chosen the model is chosen again (warm) with its lights, the foil among the
+        // candidates.
+        if (!choose || lobe == reflectance::Lobe::kLambert ||
+            lobe == reflectance::Lobe::kNormalCentred) {
+          continue;
+        }
       }
+      std::tie(test.model, test.settings) = DistanceTest(plan, o, diffuse, &starts);
       test.run = true;
       const std::string criterion = diffuse ? "diffuse" : "model";
       std::vector<std::vector<double>> costs;
@@ -300,16 +330,8 @@ DistanceChoice ChooseDistance(const DistanceCapture& capture, const solve::Norma
                                  result.scored[first + i].centre_behind_px});
               simplex_costs.push_back(cost_of(i));
             }
-            const double log_lo = std::log(kNearestSizes * result.object_size_px);
-            const double log_hi = std::log(kDistanceGrid[n - 1] * result.object_size_px);
-            NelderMead(std::move(simplex), std::move(simplex_costs), {0.02, 0.05 * surface.relief},
-                       30, [&](const std::vector<double>& p) {
-                         if (!(p[0] >= log_lo && p[0] <= log_hi && p[1] >= 0 &&
-                               p[1] <= kDeepestRims * surface.relief)) {
-                           return std::numeric_limits<double>::infinity();
-                         }
-                         return score(std::exp(p[0]), p[1]);
-                       });
+            SearchDistanceAndCentre(std::move(simplex), std::move(simplex_costs), surface.relief,
+                                    result.object_size_px, score);
           } else {
             // Golden section in log D between the best grid point's neighbours.
             const double step_lo = g > 0 ? kDistanceGrid[g - 1] : kNearestSizes;

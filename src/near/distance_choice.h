@@ -3,12 +3,15 @@
 // near/; effective_distance.h states the model, the frame and why.
 #pragma once
 
+#include <functional>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "geometry/height_map.h"
 #include "near/effective_distance.h"
 #include "near/near.h"
+#include "solve/model_choice.h"
 
 namespace iphong::near::internal {
 
@@ -77,6 +80,22 @@ solve::NormalPlan PlanAtLights(const DistanceCapture& capture, const solve::Norm
 // coefficients).
 solve::ModelCandidate PlanModel(const solve::NormalPlan& plan);
 
+// A test of nearness: the plan's model (Lambert's with highlights censored where `diffuse`,
+// solve::MakeDiffuseTest) and the held-out settings it is scored with, unweighted, each fold's
+// normal refined from `starts` (one per pixel of the sample).
+std::pair<solve::ModelCandidate, solve::ModelChoiceSettings> DistanceTest(
+    const solve::NormalPlan& plan, const EffectiveDistanceOptions& o, bool diffuse,
+    const std::vector<Vec3d>* starts);
+
+// Whether (ln D, the centre's depth) lies in the range the choice searches: 1–32 object sizes,
+// the centre from the centroid down to kDeepestRims rims.
+bool InDistanceRange(double log_d, double behind, double relief, double object_size_px);
+// A Nelder–Mead simplex over (ln D, the centre's depth) from `simplex` (costs known), within that
+// range, `score(D, behind)` giving each point's held-out cost.
+void SearchDistanceAndCentre(std::vector<std::vector<double>> simplex, std::vector<double> costs,
+                             double relief, double object_size_px,
+                             const std::function<double(double, double)>& score);
+
 struct DistanceChoice {
   double distance = 0;               // pixels; infinity: distant lights
   double behind = 0;                 // the centre's depth behind the centroid, pixels
@@ -102,8 +121,9 @@ DistanceChoice ChooseDistance(const DistanceCapture& capture, const solve::Norma
 struct RefinedDistance {
   double distance = 0, behind = 0;
   // The start's held-out cost less the best's (t² per pixel) and its paired standard error; the
-  // start is returned unless the gain exceeds the error.
+  // start is returned (moved false) unless the gain exceeds the error.
   double gain = 0, gain_error = 0;
+  bool moved = false;
 };
 RefinedDistance RefineDistance(const DistanceCapture& capture, const solve::NormalPlan& plan,
                                const EffectiveDistanceOptions& o, const DistanceSurface& surface,

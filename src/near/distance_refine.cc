@@ -6,7 +6,6 @@
 #include <vector>
 
 #include "core/golden_section.h"
-#include "core/nelder_mead.h"
 #include "near/distance_choice.h"
 #include "near/internal.h"
 #include "solve/assemble.h"
@@ -35,20 +34,13 @@ RefinedDistance RefineDistance(const DistanceCapture& capture, const solve::Norm
   for (std::size_t i = 0; i < sample.size(); ++i) sample[i] = i;
   const std::vector<int> fold =
       plan.model_choice.fold.empty() ? solve::LightFolds(data.images) : plan.model_choice.fold;
-  solve::ModelCandidate model = PlanModel(plan);
-  solve::ModelChoiceSettings settings;
-  settings.fit = solve::internal::FitSettingsOf(plan.options);
-  settings.fit.shading_weights = {};  // unweighted, as the first choice's fits
-  settings.sample = o.normals.model_sample;
-  settings.threads = o.normals.threads;
-  settings.starts = &starts;
   // The foil cannot judge a distance (distance_choice.cc): the diffuse test does.
-  diffuse = diffuse || model.lobe == reflectance::Lobe::kNormalCentred;
-  if (diffuse) solve::MakeDiffuseTest(model, settings);
+  diffuse = diffuse || PlanModel(plan).lobe == reflectance::Lobe::kNormalCentred;
+  const auto [model, settings] = DistanceTest(plan, o, diffuse, &starts);
   const std::string criterion =
       std::string(diffuse ? "diffuse" : "model") + ", again on the near surface";
-  RefinedDistance best{distance, behind, 0, 0};
-  double best_cost = std::numeric_limits<double>::infinity(), start_cost = best_cost;
+  RefinedDistance best{distance, behind, 0, 0, false};
+  double best_cost = std::numeric_limits<double>::infinity();
   std::vector<double> start_costs, best_costs;
   const auto score = [&](double d, double b) {
     solve::ModelCandidate m = model;
@@ -62,35 +54,27 @@ RefinedDistance RefineDistance(const DistanceCapture& capture, const solve::Norm
     }
     return m.heldout_cost;
   };
-  start_cost = score(distance, behind);
-  const double log_lo = std::log(kNearestSizes * result.object_size_px);
-  const double log_hi =
-      std::log(kDistanceGrid[std::size(kDistanceGrid) - 1] * result.object_size_px);
-  const bool deep = surface.relief > 0.5;
-  if (deep) {
-    // The first choice's neighbours: a tenth farther, and the centre a quarter of the rim deeper
-    // (each the other way where that would leave the range the first choice searched).
-    const double step_d = std::log(distance) + 0.1 <= log_hi ? 0.1 : -0.1;
-    const double step_b =
-        0.25 * surface.relief *
-        (behind + 0.25 * surface.relief <= kDeepestRims * surface.relief ? 1 : -1);
-    std::vector<std::vector<double>> simplex = {{std::log(distance), behind},
-                                                {std::log(distance) + step_d, behind},
-                                                {std::log(distance), behind + step_b}};
-    std::vector<double> costs = {start_cost, score(std::exp(simplex[1][0]), behind),
-                                 score(distance, behind + step_b)};
-    NelderMead(std::move(simplex), std::move(costs), {0.02, 0.05 * surface.relief}, 30,
-               [&](const std::vector<double>& p) {
-                 if (!(p[0] >= log_lo && p[0] <= log_hi && p[1] >= 0 &&
-                       p[1] <= kDeepestRims * surface.relief)) {
-                   return std::numeric_limits<double>::infinity();
-                 }
-                 return score(std::exp(p[0]), p[1]);
-               });
+  const double start_cost = score(distance, behind);
+  if (surface.relief > 0.5) {
+    // The first choice's neighbours: a tenth farther, and the centre a quarter of the rim deeper,
+    // each the other way where that would leave the range the first choice searched.
+    const double log_d = std::log(distance);
+    const auto inside = [&](double l, double b) {
+      return InDistanceRange(l, b, surface.relief, result.object_size_px);
+    };
+    const double step_d = inside(log_d + 0.1, behind) ? 0.1 : -0.1;
+    const double step_b = inside(log_d, behind + 0.25 * surface.relief) ? 0.25 * surface.relief
+                                                                        : -0.25 * surface.relief;
+    SearchDistanceAndCentre(
+        {{log_d, behind}, {log_d + step_d, behind}, {log_d, behind + step_b}},
+        {start_cost, score(std::exp(log_d + step_d), behind), score(distance, behind + step_b)},
+        surface.relief, result.object_size_px, score);
   } else {
-    GoldenSectionLog(std::max(std::exp(log_lo), distance / 1.5),
-                     std::min(std::exp(log_hi), distance * 1.5), 6,
-                     [&](double d) { return score(d, behind); });
+    // A flat object's centre is its centroid (distance_choice.cc): D alone.
+    GoldenSectionLog(std::max(kNearestSizes * result.object_size_px, distance / 1.5),
+                     std::min(kDistanceGrid[std::size(kDistanceGrid) - 1] * result.object_size_px,
+                              distance * 1.5),
+                     6, [&](double d) { return score(d, behind); });
   }
   std::tie(best.gain, best.gain_error) =
       solve::PairedDifference(start_costs.data(), best_costs.data(), start_costs.size());
@@ -98,17 +82,17 @@ RefinedDistance RefineDistance(const DistanceCapture& capture, const solve::Norm
   // is noise: the first choice stands unless the new one predicts better beyond one paired
   // standard error, the line every choice of D draws (DiLiGenT's ball at 27 object sizes: a gain
   // of 0.07 t² moved the centre by a rim's depth).
-  const bool moves = best.gain > best.gain_error;
+  best.moved = best.gain > best.gain_error;
   if (o.log) {
     char line[300];
     std::snprintf(line, sizeof line,
                   "the %s again on the near surface: best %.4g px, the centre %.3g px behind "
                   "(from %.4g px, %.3g px), held-out gain %.4g +- %.2g%s",
                   diffuse ? "diffuse term" : "object's model", best.distance, best.behind, distance,
-                  behind, best.gain, best.gain_error, moves ? "" : ": kept");
+                  behind, best.gain, best.gain_error, best.moved ? "" : ": kept");
     o.log(line);
   }
-  if (!moves) best.distance = distance, best.behind = behind;
+  if (!best.moved) best.distance = distance, best.behind = behind;
   return best;
 }
 

@@ -247,7 +247,7 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
     const RefinedDistance refined =
         RefineDistance(capture, near_plan, o, surface, depth, last, result.criterion == "diffuse",
                        distance, behind, result);
-    if (refined.distance == distance && refined.behind == behind) break;  // the first stands
+    if (!refined.moved) break;  // the first stands
     PhotometricData moved =
         NearData(LayoutOf(data), frame, depth, surface.CentreAt(refined.behind), refined.distance);
     const double change = LightsChangedDeg(near, moved);

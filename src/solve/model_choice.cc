@@ -267,26 +267,32 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   const auto in_variant = [](const ModelCandidate& m, const ModelCandidate& v) {
     return m.ambient_term == v.ambient_term && m.code_offset == v.code_offset;
   };
+  // The lowest of `lobe`'s first `end` scores (in `variant`'s observations only, if given). Only
+  // complete models: one that dropped out of the race has no cost to compare.
+  const auto best_of_lobe = [&](reflectance::Lobe lobe, std::size_t end,
+                                const ModelCandidate* variant) {
+    std::optional<std::size_t> best;
+    for (std::size_t i = 0; i < end; ++i) {
+      const ModelCandidate& m = choice.scored[i];
+      if (complete[i] && m.lobe == lobe && (!variant || in_variant(m, *variant)) &&
+          (!best || m.heldout_cost < choice.scored[*best].heldout_cost)) {
+        best = i;
+      }
+    }
+    return best;
+  };
   for (std::size_t vi = 0; vi < variants.size(); ++vi) {
     const ModelCandidate& v = variants[vi];
     std::vector<ModelCandidate> models;
     if (vi > 0 && v.code_offset != 0 && variants[vi - 1].code_offset == 0 &&
         variants[vi - 1].ambient_term == v.ambient_term) {
-      const std::size_t scored = choice.scored.size();
       for (const ModelCandidate& g : grid) {
-        std::optional<std::size_t> best;
-        for (std::size_t i = 0; i < scored; ++i) {
-          const ModelCandidate& m = choice.scored[i];
-          if (complete[i] && m.lobe == g.lobe && in_variant(m, variants[vi - 1]) &&
-              (!best || m.heldout_cost < choice.scored[*best].heldout_cost)) {
-            best = i;
-          }
+        if (std::any_of(models.begin(), models.end(),
+                        [&](const ModelCandidate& m) { return m.lobe == g.lobe; })) {
+          continue;  // this lobe's best is in already
         }
-        if (!best || std::any_of(models.begin(), models.end(),
-                                 [&](const ModelCandidate& m) { return m.lobe == g.lobe; })) {
-          continue;
-        }
-        models.push_back(choice.scored[*best]);
+        const auto best = best_of_lobe(g.lobe, choice.scored.size(), &variants[vi - 1]);
+        if (best) models.push_back(choice.scored[*best]);
       }
     } else {
       models = grid;
@@ -318,18 +324,9 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
   }
   for (const reflectance::Lobe lobe : {reflectance::Lobe::kPhong, reflectance::Lobe::kBlinnPhong,
                                        reflectance::Lobe::kNormalCentred}) {
-    // The lowest of this lobe's first `end` scores (in `variant`'s observations only, if given).
-    // Only complete models: a lobe none of whose grid points stayed in the race is not refined.
+    // A lobe none of whose grid points stayed in the race is not refined.
     const auto best_of = [&](std::size_t end, const ModelCandidate* variant) {
-      std::optional<std::size_t> best;
-      for (std::size_t i = 0; i < end; ++i) {
-        const ModelCandidate& m = choice.scored[i];
-        if (complete[i] && m.lobe == lobe && (!variant || in_variant(m, *variant)) &&
-            (!best || m.heldout_cost < choice.scored[*best].heldout_cost)) {
-          best = i;
-        }
-      }
-      return best;
+      return best_of_lobe(lobe, end, variant);
     };
     const std::optional<std::size_t> grid_best = best_of(grid_size, nullptr);
     if (!grid_best || !(choice.scored[*grid_best].heldout_cost < lambert_cost)) continue;
