@@ -198,7 +198,8 @@ view: (3,) or the shape of normal; direction from the surface toward the viewer.
 lights: list of DirectionalLight / PointLight; ambient: RGB triple or number (Ia).
 position: surface points (shape of normal), needed for point lights.
 mask: boolean array of normal.shape[:-1]; pixels outside are 0.
-model: "phong", "blinn-phong", "lambert" or "normal-centred" ((N.L)^n); fast_specular: seed 003's (1 - beta*lambda)^gamma.
+model: "phong", "blinn-phong", "lambert", "oren-nayar" (rough diffuse, the facets' slope in
+radians as the shininess) or "normal-centred" ((N.L)^n); fast_specular: seed 003's (1 - beta*lambda)^gamma.
 Returns linear, unclamped RGB with the shape of normal (float32 for float32 input, else float64).)doc");
 
   py::class_<reflectance::MaterialPreset>(m, "MaterialPreset")

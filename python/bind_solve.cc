@@ -479,10 +479,11 @@ depend on its own observations and the plan only, so any blocking gives the same
 
 images (K, H, W, 3) linear float; light_directions (K, 3) from the surface toward the light;
 light_intensities (K, 3) or None (ones); mask (H, W) bool or None; model None (chosen by
-held-out prediction among Lambert, Phong, Blinn-Phong and a foil centred on the normal, the
-normals' integrability deciding between the foil and a highlight: model_scores lists every
-candidate), "phong", "blinn-phong" or "normal-centred" (that lobe, its shininess chosen) or
-"lambert" (Woodham); material: dict
+held-out prediction among Lambert, Oren-Nayar's rough diffuse term, Phong, Blinn-Phong and a foil
+centred on the normal, the normals' integrability deciding between the foil and a highlight:
+model_scores lists every candidate), "phong", "blinn-phong" or "normal-centred" (that lobe, its
+shininess chosen), "oren-nayar" (its facet slope chosen, in radians, reported as the shininess)
+or "lambert" (Woodham); material: dict
 with ka, ks, shininess, ambient (and model) when the coefficients are known, else ks is
 estimated per pixel; shadow_threshold: observations darker than the model by more than this
 fraction of the pixel's brightness count as shadowed. With the model chosen, model_map (H, W) says

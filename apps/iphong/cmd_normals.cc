@@ -397,7 +397,7 @@ void AddNormalsCommand(CLI::App& app) {
   cmd->add_option(
          "--model", o->model,
          "Reflectance model (default: material.json's, else chosen by held-out prediction)")
-      ->check(CLI::IsMember({"phong", "blinn-phong", "lambert", "normal-centred"}));
+      ->check(CLI::IsMember({"phong", "blinn-phong", "lambert", "oren-nayar", "normal-centred"}));
   cmd->add_flag("--ignore-material", o->ignore_material,
                 "Ignore material.json: choose the model and estimate ks per pixel");
   cmd->add_option("--discard-dark", o->discard_dark,

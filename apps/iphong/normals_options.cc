@@ -124,7 +124,10 @@ nlohmann::json SolveMetricsJson(const solve::NormalOptions& options,
 }
 
 void SayModelAndFlags(const CommonOptions& common, const solve::NormalResult& result) {
-  if (result.material_estimated) {
+  if (result.material_estimated && result.model == reflectance::Lobe::kOrenNayar) {
+    Say(common, "Model oren-nayar, facet slope %.3f rad (%s)\n", result.shininess,
+        result.specular_note.c_str());
+  } else if (result.material_estimated) {
     Say(common, "Model %s, shininess %.1f; ks median [%.3f %.3f %.3f] (%s)\n",
         reflectance::LobeName(result.model).c_str(), result.shininess, result.ks[0], result.ks[1],
         result.ks[2], result.specular_note.c_str());

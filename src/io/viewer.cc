@@ -113,7 +113,7 @@ uniform sampler2D normals, albedo, specmap;
 uniform vec2 size;
 uniform vec3 light, intensity, ambient, ks;
 uniform float shininess, albedoScale, specScale, specular, exposure;
-uniform int lobe;          // 0 Phong, 1 Blinn-Phong, 2 Lambert, 3 normal-centred
+uniform int lobe;          // 0 Phong, 1 Blinn-Phong, 2 Lambert, 3 normal-centred, 4 Oren-Nayar
 uniform bool useSpecMap;
 float decode(float c) { return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4); }
 vec3 decode3(vec3 c) { return vec3(decode(c.r), decode(c.g), decode(c.b)); }
@@ -132,7 +132,7 @@ void main() {
   vec3 c = ambient;
   float ndl = dot(N, L);
   if (ndl > 0.0) {
-    float s = 0.0;
+    float s = 0.0, d = ndl;
     if (lobe == 0) {
       float rv = dot(2.0 * ndl * N - L, V);
       if (rv > 0.0) s = pow(rv, shininess);
@@ -141,8 +141,14 @@ void main() {
       if (nh > 0.0) s = pow(nh, shininess);
     } else if (lobe == 3) {
       s = pow(ndl, shininess);
+    } else if (lobe == 4) {
+      // reflectance::OrenNayarDiffuse, the facets' slope in the shininess' place.
+      float ndv = dot(N, V), s2 = shininess * shininess;
+      float spread = max(0.0, dot(L, V) - ndl * ndv);
+      d = ndv > 0.0 ? ndl * (1.0 - 0.5 * s2 / (s2 + 0.33) +
+                             0.45 * s2 / (s2 + 0.09) * spread / max(ndl, ndv)) : 0.0;
     }
-    c += intensity * (kd * ndl + k * s);
+    c += intensity * (kd * d + k * s);
   }
   c *= exposure;
   gl_FragColor = vec4(encode(c.r), encode(c.g), encode(c.b), 1.0);
@@ -287,6 +293,7 @@ std::string ViewerPage(const render::RelightInput& input, const std::string& tit
                  input.lobe == reflectance::Lobe::kPhong        ? "0"
                  : input.lobe == reflectance::Lobe::kBlinnPhong ? "1"
                  : input.lobe == reflectance::Lobe::kLambert    ? "2"
+                 : input.lobe == reflectance::Lobe::kOrenNayar  ? "4"
                                                                 : "3");
   page = Replace(page, "@MODEL@", reflectance::LobeName(input.lobe));
   page = Replace(page, "@USE_SPEC_MAP@", input.specular ? "true" : "false");

@@ -46,8 +46,10 @@ Lobe ParseLobe(const std::string& name) {
   if (name == "blinn-phong" || name == "blinn_phong" || name == "blinn") return Lobe::kBlinnPhong;
   if (name == "lambert") return Lobe::kLambert;
   if (name == "normal-centred" || name == "normal_centred") return Lobe::kNormalCentred;
-  throw std::invalid_argument("unknown reflectance model '" + name +
-                              "' (expected phong, blinn-phong, lambert or normal-centred)");
+  if (name == "oren-nayar" || name == "oren_nayar") return Lobe::kOrenNayar;
+  throw std::invalid_argument(
+      "unknown reflectance model '" + name +
+      "' (expected phong, blinn-phong, lambert, oren-nayar or normal-centred)");
 }
 
 std::string LobeName(Lobe lobe) {
@@ -60,6 +62,8 @@ std::string LobeName(Lobe lobe) {
       return "lambert";
     case Lobe::kNormalCentred:
       return "normal-centred";
+    case Lobe::kOrenNayar:
+      return "oren-nayar";
   }
   return "phong";
 }

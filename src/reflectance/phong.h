@@ -33,6 +33,10 @@ enum class Lobe {
   // reflection model: the model choice's foil, a lobe of a highlight's width that follows the
   // normal, as irradiance fall-off or a non-Lambertian diffuse term does (solve/model_choice.h).
   kNormalCentred,
+  // No specular term; the diffuse term is Oren and Nayar's for a rough surface (their qualitative
+  // model, SIGGRAPH 1994) with the facets' slope σ (radians) in the shininess' place:
+  // OrenNayarDiffuse. A matte surface of V-grooves: brighter than the cosine toward the view.
+  kOrenNayar,
 };
 
 // How the power of the lobe is computed.
@@ -151,6 +155,7 @@ T SpecularLobe(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam
   if (options.lobe == Lobe::kLambert) return T(0);
   const T n_dot_l = normal_cam.dot(light_dir_cam);
   if (!(n_dot_l > T(0))) return T(0);
+  if (options.lobe == Lobe::kOrenNayar) return T(0);
   if (options.lobe == Lobe::kNormalCentred) {
     const T lambda = options.power == PowerMode::kFastApprox ? T(1) - n_dot_l : T(0);
     return LobePower(n_dot_l, lambda, shininess, options);
@@ -178,6 +183,29 @@ T SpecularLobe(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam
   return LobePower(cosine, lambda, shininess, options);
 }
 
+// Oren and Nayar's qualitative diffuse factor for the facets' slope σ (radians):
+//   cos θi·(A + B·max(0, cos(φi − φr))·sin α·tan β),  α = max(θi, θr), β = min(θi, θr),
+//   A = 1 − σ²/(2(σ² + 0.33)),  B = 0.45 σ²/(σ² + 0.09),
+// θi, θr the light's and the view's angles from N and φ their azimuths. In vectors, with
+// sin θi sin θr cos(φi − φr) = L·V − (N·L)(N·V) and cos β = max(N·L, N·V), the B part is
+// (N·L)·max(0, L·V − (N·L)(N·V)) / max(N·L, N·V): no trigonometry, and smooth where the
+// trigonometric form's azimuth is undefined (N = V). σ = 0 is the cosine. Zero where N·L ≤ 0 or
+// N·V ≤ 0 (a facet the camera cannot see reflects nothing toward it).
+template <typename T, typename D = T>
+T OrenNayarDiffuse(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam,
+                   const detail::Directions<D>& light_dir_cam, const T& slope) {
+  const T n_dot_l = normal_cam.dot(light_dir_cam);
+  if (!(n_dot_l > T(0))) return T(0);
+  const T n_dot_v = normal_cam.dot(view_cam);
+  if (!(n_dot_v > T(0))) return T(0);
+  const T s2 = slope * slope;
+  const T a = T(1) - T(0.5) * s2 / (s2 + T(0.33));
+  const T b = T(0.45) * s2 / (s2 + T(0.09));
+  const T spread = T(light_dir_cam.dot(view_cam)) - n_dot_l * n_dot_v;
+  if (!(spread > T(0))) return a * n_dot_l;
+  return n_dot_l * (a + b * spread / (n_dot_l > n_dot_v ? n_dot_l : n_dot_v));
+}
+
 // One light's two shading factors at a point, with seed 003's rules applied: diffuse = N·L where
 // positive (else 0) and specular = the lobe (0 unless N·L > 0). A light contributes
 // Id ⊙ kd · diffuse + Is ⊙ ks · specular; the albedo enters linearly, which is what lets the
@@ -195,6 +223,10 @@ LightFactors<T> ShadingFactors(const Vec3T<T>& normal_cam, const detail::Directi
   LightFactors<T> f;
   const T n_dot_l = normal_cam.dot(light_dir_cam);
   if (!(n_dot_l > T(0))) return f;
+  if (options.lobe == Lobe::kOrenNayar) {
+    f.diffuse = OrenNayarDiffuse<T, D>(normal_cam, view_cam, light_dir_cam, shininess);
+    return f;
+  }
   f.diffuse = n_dot_l;
   f.specular = SpecularLobe<T, D>(normal_cam, view_cam, light_dir_cam, shininess, options);
   return f;

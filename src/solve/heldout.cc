@@ -144,7 +144,9 @@ PixelModelTest TestPixelModel(NormalSearch& search, const CandidateTable& table,
     if (usable[j] != 0) lobe_peak = std::max(lobe_peak, r.ks * lobe[j]);
   }
   PixelModelTest out;
-  if (lobe_peak <= kNegligibleLobe * brightness) {
+  // A model without a lobe departs from Lambert in its diffuse term (Oren–Nayar's): no peak to
+  // measure, so every pixel is tested.
+  if (table.has_lobe() && lobe_peak <= kNegligibleLobe * brightness) {
     out.lambert = true;
     return out;
   }

@@ -25,7 +25,7 @@ struct Square {
 }  // namespace
 
 double TileToleranceDeg(reflectance::Lobe lobe, double shininess) {
-  if (lobe == reflectance::Lobe::kLambert) return 8;
+  if (lobe == reflectance::Lobe::kLambert || lobe == reflectance::Lobe::kOrenNayar) return 8;
   return std::clamp(0.5 * LobeHalfWidthDeg(lobe, shininess), 1.0, 8.0);
 }
 

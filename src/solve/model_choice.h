@@ -1,5 +1,6 @@
-// Which reflectance model the data support — Lambert, Phong or Blinn-Phong, and the lobe's
-// shininess — decided by how well each predicts observations it was not fitted to. On a sample
+// Which reflectance model the data support — Lambert, Oren–Nayar's rough diffuse term, Phong or
+// Blinn-Phong, and the lobe's shininess or the facets' slope — decided by how well each predicts
+// observations it was not fitted to. On a sample
 // of pixels spread over the object, the lights are split in two fixed halves; each model is
 // fitted (the global search, search.h) to one half and charged the censored cost of the other
 // half's observations (internal::CensoredCost, in units of the pixel's t², so every pixel counts
@@ -32,7 +33,7 @@ namespace iphong::solve {
 
 struct ModelCandidate {
   reflectance::Lobe lobe = reflectance::Lobe::kLambert;
-  double shininess = 1;
+  double shininess = 1;  // the lobe's n; Oren–Nayar's facet slope σ (radians)
   // Each pixel's free ks pulled toward the object's (SharedSpecular) with this weight, in
   // observations of the lobe's peak; 0: free.
   double ks_prior_weight = 0;
@@ -55,12 +56,14 @@ constexpr double kMaxLobeHalfWidthDeg = 30;
 
 // The half width at half maximum of a lobe, in degrees of the light's direction.
 double LobeHalfWidthDeg(reflectance::Lobe lobe, double shininess);
-// The shininess whose lobe is kMaxLobeHalfWidthDeg wide: Phong and the foil 4.8, Blinn-Phong 19.9.
+// The shininess whose lobe is kMaxLobeHalfWidthDeg wide: Phong and the foil 4.8, Blinn-Phong 19.9;
+// for Oren–Nayar's term the least facet slope refined to, 0.05 rad.
 double MinimumShininess(reflectance::Lobe lobe);
 
-// The models tried: Lambert, then each lobe (Phong, Blinn-Phong and the normal-centred foil) from
-// its minimum shininess up in six factors of 2 (half widths 30° down to about 4°). With `only`
-// set, that lobe's alone.
+// The models tried: Lambert, Oren–Nayar's rough diffuse term at facet slopes 0.1 … 1.6 rad
+// (factors of 2; the slope in the shininess' place), then each lobe (Phong, Blinn-Phong and the
+// normal-centred foil) from its minimum shininess up in six factors of 2 (half widths 30° down to
+// about 4°). With `only` set, that model's alone.
 std::vector<ModelCandidate> ModelFamily(std::optional<reflectance::Lobe> only);
 
 // Cross-validation folds over the lights: each fit sees at least this many (or all but one).

@@ -452,18 +452,23 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
 void FinishNormals(NormalResult& result, const NormalPlan& plan,
                    const std::vector<Vec3f>& sample_ks) {
   const NormalOptions& o = plan.options;
-  const bool specular = o.model != reflectance::Lobe::kLambert;
+  // Oren–Nayar's rough diffuse term has no lobe: its one coefficient is the facets' slope.
+  const bool rough = o.model == reflectance::Lobe::kOrenNayar;
+  const bool specular = o.model != reflectance::Lobe::kLambert && !rough;
   if (o.material_known) {
     result.ks = o.ks;
   } else if (plan.requested_model != reflectance::Lobe::kLambert) {
-    result.material_estimated = specular;
+    result.material_estimated = specular || rough;
     result.specular_identifiable = specular;
-    result.ks = MedianKs(sample_ks);
+    result.ks = specular ? MedianKs(sample_ks) : Vec3d::Zero();
     result.specular_note =
         specular ? "model chosen by held-out prediction (" + plan.model_choice.note +
                        "); ks per pixel in specular.exr, this is the median where the lobe was kept"
-                 : "no specular model predicts held-out observations better than Lambert's (" +
-                       plan.model_choice.note + ")";
+        : rough ? "Oren-Nayar's rough diffuse term chosen by held-out prediction (" +
+                      plan.model_choice.note +
+                      "); its facet slope in radians is the shininess, no specular term"
+                : "no specular model predicts held-out observations better than Lambert's (" +
+                      plan.model_choice.note + ")";
   }
 }
 

@@ -3,10 +3,10 @@
 //
 // `lambert`: Woodham's least squares (woodham.h), the baseline. Otherwise, per pixel:
 // 1. The model: with known coefficients (material.json) the given one; else the lobe and its
-//    shininess the data support, chosen by held-out prediction among Lambert, Phong,
-//    Blinn-Phong and a foil centred on the normal (model_choice.h; between the foil and a
-//    highlight the normals' integrability decides, highlight_check.h), ks then free per pixel
-//    and channel.
+//    shininess the data support, chosen by held-out prediction among Lambert, Oren–Nayar's rough
+//    diffuse term, Phong, Blinn-Phong and a foil centred on the normal (model_choice.h; between the
+//    foil and a highlight the normals' integrability decides, highlight_check.h), ks then free per
+//    pixel and channel.
 // 2. A global search over candidate normals on the visible hemisphere (search.h), scored by the
 //    censored cost of the observations, so the fit cannot start in a wrong basin.
 // 3. A local Levenberg–Marquardt fit from the winner (pixel_fit.h): two unknowns on a chart of
@@ -31,8 +31,9 @@ struct NormalOptions {
   // The lobe. Estimated coefficients: the family the shininess (and, with choose_model, the lobe)
   // is chosen from; kLambert: Woodham alone.
   reflectance::Lobe model = reflectance::Lobe::kPhong;
-  // Estimated coefficients: choose among Lambert, Phong, Blinn-Phong and the normal-centred
-  // foil by held-out prediction (model_choice.h) instead of using `model`'s family alone.
+  // Estimated coefficients: choose among Lambert, Oren–Nayar's rough diffuse term, Phong,
+  // Blinn-Phong and the normal-centred foil by held-out prediction (model_choice.h) instead of
+  // using `model`'s family alone.
   bool choose_model = true;
   // Woodham: fractions of each pixel's observations dropped, darkest and brightest first.
   double discard_dark = 0.3;

@@ -86,10 +86,11 @@ def test_relit_under_a_capture_light_reproduces_its_photo(capture, tmp_path):
 
 @pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (scripts/setup-debian.sh "
                                              "installs it); the viewer test needs a browser")
-@pytest.mark.parametrize("model", [None, "normal-centred"])
+@pytest.mark.parametrize("model", [None, "normal-centred", "oren-nayar"])
 def test_viewer_in_a_browser_matches_relight(capture, tmp_path, model):
-    """The shader's second spelling of the model, for the lobe the choice takes (Phong here) and
-    for the foil centred on the normal, which it takes where a brightening follows the normal."""
+    """The shader's second spelling of the model, for the lobe the choice takes (Phong here), for
+    the foil centred on the normal, which it takes where a brightening follows the normal, and for
+    Oren-Nayar's rough diffuse term, whose slope takes the shininess' place."""
     light = "-0.4,0.5,0.77"
     normals = capture / "n"
     if model:

@@ -233,7 +233,11 @@ INSTANTIATE_TEST_SUITE_P(
                       LobeCase{Lobe::kLambert, PowerMode::kExact, "Lambert"},
                       LobeCase{Lobe::kNormalCentred, PowerMode::kExact, "NormalCentredExact"},
                       LobeCase{Lobe::kNormalCentred, PowerMode::kFastApprox,
-                               "NormalCentredFastApprox"}),
+                               "NormalCentredFastApprox"},
+                      // The shininess' place holds the facets' slope; its kinks (L·V =
+                      // (N·L)(N·V), N·L = N·V) are met within the differences' step by chance
+                      // only.
+                      LobeCase{Lobe::kOrenNayar, PowerMode::kExact, "OrenNayar"}),
     [](const auto& info) { return std::string(info.param.name); });
 
 }  // namespace

@@ -123,6 +123,45 @@ TEST(PhongModel, NormalCentredLobeIsTheCosinePowerWhateverTheView) {
   EXPECT_EQ(SpecularLobe<double>(n, n, InPlaneXZ(1.7), 3.0, foil), 0.0);
 }
 
+TEST(PhongModel, OrenNayarIsThePapersFormulaInVectors) {
+  // Oren and Nayar's qualitative model as their paper writes it, in angles: cos θi·(A + B·
+  // max(0, cos(φi − φr))·sin α·tan β), against the vector form without trigonometry.
+  ModelOptions rough;
+  rough.lobe = Lobe::kOrenNayar;
+  const auto at = [](double theta, double phi) {
+    return Vec3d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+  };
+  const Vec3d n(0, 0, 1);
+  int compared = 0;
+  for (double slope : {0.0, 0.1, 0.3, 0.6, 1.2}) {
+    const double s2 = slope * slope;
+    const double a = 1 - 0.5 * s2 / (s2 + 0.33), b = 0.45 * s2 / (s2 + 0.09);
+    for (double theta_i : {0.05, 0.4, 0.9, 1.4}) {
+      for (double theta_r : {0.0, 0.3, 0.8, 1.3}) {
+        for (double phi : {0.0, 1.0, 2.0, 3.0}) {
+          const Vec3d l = at(theta_i, 0.7), v = at(theta_r, 0.7 + phi);
+          const double alpha = std::max(theta_i, theta_r), beta = std::min(theta_i, theta_r);
+          const double paper = std::cos(theta_i) * (a + b * std::max(0.0, std::cos(phi)) *
+                                                            std::sin(alpha) * std::tan(beta));
+          EXPECT_NEAR(OrenNayarDiffuse<double>(n, v, l, slope), paper, 1e-12)
+              << slope << " " << theta_i << " " << theta_r << " " << phi;
+          const LightFactors<double> f = ShadingFactors<double>(n, v, l, slope, rough);
+          EXPECT_NEAR(f.diffuse, paper, 1e-12);
+          EXPECT_EQ(f.specular, 0.0);
+          ++compared;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(compared, 320);
+  // Smooth facets are Lambert's cosine; nothing from behind the surface or toward a viewer
+  // behind it; a rough surface is brighter than A·cos θi toward the viewer (its retro-reflection).
+  EXPECT_NEAR(OrenNayarDiffuse<double>(n, at(1.0, 2.0), at(0.6, 0.1), 0.0), std::cos(0.6), 1e-15);
+  EXPECT_EQ(OrenNayarDiffuse<double>(n, at(0.3, 0), at(1.7, 0), 0.5), 0.0);
+  EXPECT_EQ(OrenNayarDiffuse<double>(n, at(1.7, 0), at(0.3, 0), 0.5), 0.0);
+  EXPECT_GT(OrenNayarDiffuse<double>(n, at(1.0, 0), at(1.0, 0), 0.5), std::cos(1.0));
+}
+
 TEST(PhongModel, FullTermClosedForm) {
   const Vec3d n(0, 0, 1), l = InPlaneXZ(0.5), v = InPlaneXZ(-0.2);
   const Material m = Shiny(20);

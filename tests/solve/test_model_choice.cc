@@ -43,6 +43,40 @@ TEST(Normals, ChoosesTheLobeAndEstimatesKsAndAmbient) {
   EXPECT_GT(w.mean_deg, 3 * e.mean_deg);
 }
 
+// A rough matte sphere (Oren–Nayar, facet slope 0.4, rendered by iphong's renderer; the numpy
+// renders of tests/python/test_reflectance_mismatch.py are the independent check): the family
+// holds the rough term at five slopes, the choice takes it with the slope rendered, its halves
+// agreeing on it, and the normals come back where Lambert flattens the sphere.
+TEST(Normals, ARoughMatteSphereTakesTheRoughDiffuseTermAndItsSlope) {
+  const std::vector<ModelCandidate> family = ModelFamily(std::nullopt);
+  std::vector<double> slopes;
+  for (const ModelCandidate& m : family) {
+    if (m.lobe == reflectance::Lobe::kOrenNayar) slopes.push_back(m.shininess);
+  }
+  EXPECT_EQ(slopes, (std::vector<double>{0.1, 0.2, 0.4, 0.8, 1.6}));
+  EXPECT_EQ(ModelFamily(reflectance::Lobe::kOrenNayar).size(), 5u);
+  reflectance::Material rough;
+  rough.kd = Vec3d(0.6, 0.5, 0.4);
+  rough.ks = Vec3d::Zero();
+  rough.shininess = 0.4;
+  const Synthetic s =
+      MakeSphereData(rough, 24, 0.002, Vec3d::Zero(), 96, false, reflectance::Lobe::kOrenNayar);
+  const NormalResult r = EstimateNormals(s.data, NormalOptions{});
+  EXPECT_EQ(r.model, reflectance::Lobe::kOrenNayar) << r.model_choice.note;
+  EXPECT_NEAR(r.shininess / 0.4, 1.0, 0.05);
+  EXPECT_EQ(r.ks, Vec3d::Zero());
+  EXPECT_EQ(r.model_choice.note.find("rough term left out"), std::string::npos);
+  const double e = CompareNormals(r.normals, s.out.normal_cam, s.out.mask).mean_deg;
+  NormalOptions lambert;
+  lambert.model = reflectance::Lobe::kLambert;
+  const double w =
+      CompareNormals(EstimateNormals(s.data, lambert).normals, s.out.normal_cam, s.out.mask)
+          .mean_deg;
+  RecordProperty("mean_error_deg", std::to_string(e));
+  EXPECT_LT(e, 0.5);
+  EXPECT_GT(w, 5 * e);
+}
+
 // The model choice's sample covers a whole-frame capture: an even stride of 96 through 240×240
 // pixels in raster order visits 5 columns; the golden-ratio sequence visits most of them.
 TEST(Normals, ModelChoiceSampleIsSpreadOverRowsAndColumns) {
