@@ -17,6 +17,13 @@
 // predicts best, the mirror lobe is not taken as a highlight on prediction alone: where one also
 // beats Lambert, the plan keeps whichever of the two gives normals that make a surface
 // (PlanNormals: a highlight absorbed into tilted normals leaves a field that does not integrate).
+//
+// The family also holds Oren–Nayar's rough diffuse term (reflectance::OrenNayarDiffuse), its facet
+// slope shared by the object as a shininess is. A misfit it absorbs by tilting normals (a
+// darkened terminator, a diffuse term falling off at grazing light) wants another slope where the
+// surface faces the camera than where it turns away; so where it could be chosen, the sample's
+// frontal and oblique halves must each be predicted within a standard error by the other half's
+// best slope, or the term leaves the choice (ChooseModel; the note says so).
 #pragma once
 
 #include <optional>
