@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Normals from reflectance that is not Phong's: the default, the default with uniform weights
 (`--uniform-weights`, Python weigh_by_shading=False) and `--model lambert` on surfaces shaded by
-numpy renderings of Oren-Nayar (rough matte), Burley's diffuse (Disney's, the principled
+numpy renderings of Oren-Nayar (rough matte; the qualitative model and the full one with its
+interreflection term), Burley's diffuse (Disney's, the principled
 materials' diffuse) and a GGX lobe over Lambert (tests/python/brdf_zoo.py, written from the
 papers). Three surfaces (a sphere, MATLAB's peaks and a torus, 96 x 96, a spatially varying
 albedo, tests/python/test_normals_surfaces.py), 24 and 96 lights on a spiral down to 40 degrees
@@ -18,12 +19,14 @@ import numpy as np
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "python"))
 import iphong  # noqa: E402
-from brdf_zoo import burley_diffuse, ggx, oren_nayar, render, sphere  # noqa: E402
+from brdf_zoo import burley_diffuse, ggx, oren_nayar, oren_nayar_full, render, sphere  # noqa: E402
 import test_normals_surfaces as surfaces  # noqa: E402
 
 REFLECTANCES = {
     "Oren-Nayar, slope 0.3": (lambda n, l: oren_nayar(n, l, 0.3), None),
     "Oren-Nayar, slope 0.6": (lambda n, l: oren_nayar(n, l, 0.6), None),
+    "Oren-Nayar full model, slope 0.3": (lambda n, l: oren_nayar_full(n, l, 0.3), None),
+    "Oren-Nayar full model, slope 0.6": (lambda n, l: oren_nayar_full(n, l, 0.6), None),
     "Burley diffuse, roughness 0": (lambda n, l: burley_diffuse(n, l, 0.0), None),
     "Burley diffuse, roughness 0.5": (lambda n, l: burley_diffuse(n, l, 0.5), None),
     "Burley diffuse, roughness 1": (lambda n, l: burley_diffuse(n, l, 1.0), None),

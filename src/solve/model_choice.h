@@ -21,9 +21,9 @@
 // The family also holds Oren–Nayar's rough diffuse term (reflectance::OrenNayarDiffuse), its facet
 // slope shared by the object as a shininess is. A misfit it absorbs by tilting normals (a
 // darkened terminator, a diffuse term falling off at grazing light) wants another slope where the
-// surface faces the camera than where it turns away; so where it could be chosen, the sample's
-// frontal and oblique halves must each be predicted within a standard error by the other half's
-// best slope, or the term leaves the choice (ChooseModel; the note says so).
+// surface faces the camera than where it turns away; so where it could be chosen, one slope must
+// predict both the sample's frontal and oblique halves within two standard errors of each half's
+// best, or the term leaves the choice (ChooseModel; the note says so).
 #pragma once
 
 #include <optional>

@@ -37,6 +37,29 @@ def oren_nayar(n, l, slope):
     return np.where(cos_l > 0, value, 0.0)
 
 
+def oren_nayar_full(n, l, slope, rho=0.5):
+    """Oren and Nayar's full model (SIGGRAPH 1994, eqs. 22-24 with the interreflection term L2),
+    per unit albedo: the qualitative model above drops C3 and L2. L2 grows with the albedo; it is
+    taken at rho (the zoo's renders multiply by each pixel's albedo after)."""
+    s2 = slope ** 2
+    cos_l = np.clip(n @ l, -1, 1)
+    cos_v = np.clip(n @ VIEW, -1, 1)
+    theta_l, theta_v = np.arccos(cos_l), np.arccos(cos_v)
+    pl = l - cos_l[..., None] * n
+    pv = VIEW - cos_v[..., None] * n
+    norms = np.linalg.norm(pl, axis=-1) * np.linalg.norm(pv, axis=-1)
+    cos_phi = np.where(norms > 1e-12, np.sum(pl * pv, -1) / np.maximum(norms, 1e-12), 0.0)
+    alpha, beta = np.maximum(theta_l, theta_v), np.minimum(theta_l, theta_v)
+    c1 = 1 - 0.5 * s2 / (s2 + 0.33)
+    b = 0.45 * s2 / (s2 + 0.09)
+    c2 = np.where(cos_phi >= 0, b * np.sin(alpha), b * (np.sin(alpha) - (2 * beta / np.pi) ** 3))
+    c3 = 0.125 * s2 / (s2 + 0.09) * (4 * alpha * beta / np.pi ** 2) ** 2
+    direct = cos_l * (c1 + cos_phi * c2 * np.tan(beta)
+                      + (1 - np.abs(cos_phi)) * c3 * np.tan((alpha + beta) / 2))
+    bounce = 0.17 * rho * cos_l * s2 / (s2 + 0.13) * (1 - cos_phi * (2 * beta / np.pi) ** 2)
+    return np.where(cos_l > 0, direct + bounce, 0.0)
+
+
 def burley_diffuse(n, l, roughness):
     h = (l + VIEW) / np.linalg.norm(l + VIEW)
     cos_l = np.clip(n @ l, 0, None)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import iphong
-from brdf_zoo import burley_diffuse, ggx, oren_nayar, render, sphere
+from brdf_zoo import burley_diffuse, ggx, oren_nayar, oren_nayar_full, render, sphere
 from test_normals_surfaces import SIZE, lights
 from test_normals_surfaces import scene as surface_scene
 
@@ -32,6 +32,18 @@ def test_the_zoo_reduces_to_lambert_where_its_papers_say():
     tilted = np.array([[np.sin(1.0), 0.0, np.cos(1.0)]])
     grazing = np.array([-np.sin(0.4), 0.0, np.cos(0.4)])
     assert oren_nayar(tilted, grazing, 0.3)[0] > (tilted @ grazing)[0]
+
+
+def test_rough_matte_of_the_full_model_takes_the_qualitative_term():
+    """Oren and Nayar's full model (its C3 and interreflection terms, which the qualitative term
+    leaves out, as a renderer's rough diffuse may keep them): the two halves of the sample agree
+    on the slope within the refinement's resolution, and the term is kept. Measured: 0.47 deg,
+    slope 0.283, against Lambert's 5.60 (7.38 before the family held the term)."""
+    images, directions, mask, truth = scene(lambda n, l: oren_nayar_full(n, l, 0.3))
+    r = solve(images, directions, mask)
+    lambert = error(solve(images, directions, mask, model="lambert"), truth, mask)
+    assert r["model"] == "oren-nayar"
+    assert error(r, truth, mask) < 0.2 * lambert, (error(r, truth, mask), lambert)
 
 
 def test_the_models_rough_term_is_the_zoos():
