@@ -168,8 +168,10 @@ def test_model_chosen_by_held_out_prediction_unless_named():
                                   r["mask"])
     scores = out["model_scores"]
     assert {"model", "shininess", "heldout_cost"} <= set(scores[0])
-    # The mirror lobes and the foil centred on the normal (which a highlight does not suit).
-    assert {s["model"] for s in scores} == {"lambert", "phong", "blinn-phong", "normal-centred"}
+    # The mirror lobes, the foil centred on the normal (which a highlight does not suit) and
+    # Oren-Nayar's rough diffuse term.
+    assert {s["model"] for s in scores} == {"lambert", "oren-nayar", "phong", "blinn-phong",
+                                            "normal-centred"}
     assert out["model"] in ("phong", "blinn-phong")
     lambert = next(s["heldout_cost"] for s in scores if s["model"] == "lambert")
     assert min(s["heldout_cost"] for s in scores) < lambert  # the highlights are predicted
