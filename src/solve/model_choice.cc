@@ -462,6 +462,25 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
       held_out(m);
     }
   }
+  // The lowest complete model, among mirror lobes and Lambert only with `mirror_only`.
+  const auto is_foil = [&](std::size_t i) {
+    return choice.scored[i].lobe == reflectance::Lobe::kNormalCentred;
+  };
+  // Without the foil: the mirror lobes and Lambert (Oren–Nayar's diffuse term is no highlight).
+  const auto outside_mirror = [&](std::size_t i) {
+    return !is_mirror(choice.scored[i].lobe) &&
+           choice.scored[i].lobe != reflectance::Lobe::kLambert;
+  };
+  const auto lowest = [&](bool mirror_only) {
+    std::optional<std::size_t> best;
+    for (std::size_t i = 0; i < choice.scored.size(); ++i) {
+      if (complete[i] && !(mirror_only && outside_mirror(i)) &&
+          (!best || choice.scored[i].heldout_cost < choice.scored[*best].heldout_cost)) {
+        best = i;
+      }
+    }
+    return best;
+  };
   std::string rough_left_out;  // why the rough term left the choice, for the note
   // Oren–Nayar's term stands for a surface of V-grooves of one slope σ, and its departure from
   // the cosine grows with the view's obliquity: a misfit it absorbs instead — grazing light
@@ -497,34 +516,9 @@ ModelChoice ChooseModel(const PhotometricData& data, std::vector<ModelCandidate>
       for (std::size_t i = 0; i < choice.scored.size(); ++i) {
         if (choice.scored[i].lobe == reflectance::Lobe::kOrenNayar) complete[i] = false;
       }
-      leader.reset();  // the lowest of the rest
-      for (std::size_t i = 0; i < choice.scored.size(); ++i) {
-        if (complete[i] &&
-            (!leader || choice.scored[i].heldout_cost < choice.scored[*leader].heldout_cost)) {
-          leader = i;
-        }
-      }
+      leader = lowest(false);  // the lowest of the rest
     }
   }
-  // The lowest complete model, among mirror lobes and Lambert only with `mirror_only`.
-  const auto is_foil = [&](std::size_t i) {
-    return choice.scored[i].lobe == reflectance::Lobe::kNormalCentred;
-  };
-  // Without the foil: the mirror lobes and Lambert (Oren–Nayar's diffuse term is no highlight).
-  const auto outside_mirror = [&](std::size_t i) {
-    return !is_mirror(choice.scored[i].lobe) &&
-           choice.scored[i].lobe != reflectance::Lobe::kLambert;
-  };
-  const auto lowest = [&](bool mirror_only) {
-    std::optional<std::size_t> best;
-    for (std::size_t i = 0; i < choice.scored.size(); ++i) {
-      if (complete[i] && !(mirror_only && outside_mirror(i)) &&
-          (!best || choice.scored[i].heldout_cost < choice.scored[*best].heldout_cost)) {
-        best = i;
-      }
-    }
-    return best;
-  };
   // How far each pixel's ks may stray from the object's: free, or pulled toward it with the
   // weight of 1 or 10 observations of the lobe's peak, also by prediction — for the foil's best
   // and the mirror lobes' best when the foil leads, so the highlight weighed against it is the

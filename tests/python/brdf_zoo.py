@@ -20,19 +20,24 @@ import numpy as np
 VIEW = np.array([0.0, 0.0, 1.0])
 
 
-def oren_nayar(n, l, slope):
-    s2 = slope ** 2
-    a = 1 - 0.5 * s2 / (s2 + 0.33)
-    b = 0.45 * s2 / (s2 + 0.09)
+def _oren_nayar_angles(n, l):
+    """The paper's angles: cos θi, cos(φi − φr) (from the two directions' projections on the
+    tangent plane), α = max(θi, θr) and β = min(θi, θr)."""
     cos_l = np.clip(n @ l, -1, 1)
     cos_v = np.clip(n @ VIEW, -1, 1)
     theta_l, theta_v = np.arccos(cos_l), np.arccos(cos_v)
-    # The azimuths' cosine from the two directions' projections on the tangent plane.
     pl = l - cos_l[..., None] * n
     pv = VIEW - cos_v[..., None] * n
     norms = np.linalg.norm(pl, axis=-1) * np.linalg.norm(pv, axis=-1)
     cos_phi = np.where(norms > 1e-12, np.sum(pl * pv, -1) / np.maximum(norms, 1e-12), 0.0)
-    alpha, beta = np.maximum(theta_l, theta_v), np.minimum(theta_l, theta_v)
+    return cos_l, cos_phi, np.maximum(theta_l, theta_v), np.minimum(theta_l, theta_v)
+
+
+def oren_nayar(n, l, slope):
+    s2 = slope ** 2
+    a = 1 - 0.5 * s2 / (s2 + 0.33)
+    b = 0.45 * s2 / (s2 + 0.09)
+    cos_l, cos_phi, alpha, beta = _oren_nayar_angles(n, l)
     value = cos_l * (a + b * np.clip(cos_phi, 0, None) * np.sin(alpha) * np.tan(beta))
     return np.where(cos_l > 0, value, 0.0)
 
@@ -42,14 +47,7 @@ def oren_nayar_full(n, l, slope, rho=0.5):
     per unit albedo: the qualitative model above drops C3 and L2. L2 grows with the albedo; it is
     taken at rho (the zoo's renders multiply by each pixel's albedo after)."""
     s2 = slope ** 2
-    cos_l = np.clip(n @ l, -1, 1)
-    cos_v = np.clip(n @ VIEW, -1, 1)
-    theta_l, theta_v = np.arccos(cos_l), np.arccos(cos_v)
-    pl = l - cos_l[..., None] * n
-    pv = VIEW - cos_v[..., None] * n
-    norms = np.linalg.norm(pl, axis=-1) * np.linalg.norm(pv, axis=-1)
-    cos_phi = np.where(norms > 1e-12, np.sum(pl * pv, -1) / np.maximum(norms, 1e-12), 0.0)
-    alpha, beta = np.maximum(theta_l, theta_v), np.minimum(theta_l, theta_v)
+    cos_l, cos_phi, alpha, beta = _oren_nayar_angles(n, l)
     c1 = 1 - 0.5 * s2 / (s2 + 0.33)
     b = 0.45 * s2 / (s2 + 0.09)
     c2 = np.where(cos_phi >= 0, b * np.sin(alpha), b * (np.sin(alpha) - (2 * beta / np.pi) ** 3))
