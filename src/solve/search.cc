@@ -3,6 +3,8 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include "solve/internal.h"
 #include "solve/search_lanes.h"
@@ -84,7 +86,11 @@ CandidateTable::CandidateTable(const std::vector<Vec3d>& light_dir_cam,
   const std::size_t blocks = (normals_.size() + lanes - 1) / lanes;
   diffuse_packed_.assign(blocks * k * lanes, 0.0f);
   specular_packed_.assign(blocks * k * lanes, 0.0f);
+  sums_packed_.assign(blocks * 3 * lanes, 0.0);
   for (std::size_t c = 0; c < normals_.size(); ++c) {
+    for (std::size_t i = 0; i < 3; ++i) {
+      sums_packed_[(c / lanes) * 3 * lanes + i * lanes + c % lanes] = sums_[3 * c + i];
+    }
     const std::size_t at = (c / lanes) * k * lanes + c % lanes;
     for (std::size_t j = 0; j < k; ++j) {
       diffuse_packed_[at + j * lanes] = diffuse_[c * k + j];
@@ -92,27 +98,23 @@ CandidateTable::CandidateTable(const std::vector<Vec3d>& light_dir_cam,
       has_lobe_ = has_lobe_ || specular_[c * k + j] != 0;
     }
   }
-  if (fold_.size() != k) {
-    fold_.clear();
-    return;
-  }
+  if (fold_.size() != k) fold_.clear();
   const int folds = fold_.empty() ? 0 : 1 + *std::max_element(fold_.begin(), fold_.end());
   fold_size_.assign(folds, 0);
   for (const int f : fold_) ++fold_size_[f];
   // Each fold's own lights' sums, then the training lights' as all lights' less those: one pass
   // over the table whatever the number of folds (leave-one-out has K of them).
-  fold_sums_.assign(folds, std::vector<double>(sums_.size(), 0.0));
-  for (std::size_t c = 0; c < normals_.size(); ++c) {
+  fold_sums_.assign(3 * folds * normals_.size(), 0.0);
+  for (std::size_t c = 0; c < normals_.size() && folds > 0; ++c) {
+    double* own = &fold_sums_[3 * folds * c];
     for (std::size_t j = 0; j < k; ++j) {
-      double* own = &fold_sums_[fold_[j]][3 * c];
+      double* f = own + 3 * fold_[j];
       const double d = diffuse_[c * k + j], s = specular_[c * k + j];
-      own[0] += d * d, own[1] += d * s, own[2] += s * s;
+      f[0] += d * d, f[1] += d * s, f[2] += s * s;
     }
-  }
-  for (int f = 0; f < folds; ++f) {
-    for (std::size_t i = 0; i < sums_.size(); ++i) {
+    for (std::size_t i = 0; i < 3 * static_cast<std::size_t>(folds); ++i) {
       // Sums of non-negative terms (and of d·s ≥ 0): never below zero but for rounding.
-      fold_sums_[f][i] = std::max(0.0, sums_[i] - fold_sums_[f][i]);
+      own[i] = std::max(0.0, sums_[3 * c + i % 3] - own[i]);
     }
   }
 }
@@ -120,19 +122,12 @@ CandidateTable::CandidateTable(const std::vector<Vec3d>& light_dir_cam,
 void NormalSearch::SolveLanes(const WideLanes& d, const WideLanes& x, const WideLanes& s,
                               const WideLanes& a, const WideLanes& b, const double* fixed_ks,
                               WideLanes* kd, WideLanes* ks) const {
-  for (int i = 0; i < kSearchLanes; ++i) {
-    if (fixed_ks) {
-      (*kd)[i] = d[i] > 1e-12 ? std::max(0.0, (a[i] - *fixed_ks * x[i]) / d[i]) : 0.0;
-      (*ks)[i] = *fixed_ks;
-      continue;
-    }
-    const internal::CoefficientPair<double> c =
-        ks_prior_
-            ? internal::NonNegativePair(d[i], x[i], s[i], a[i], b[i], prior_weight_, *ks_prior_)
-            : internal::NonNegativePair(d[i], x[i], s[i], a[i], b[i]);
-    (*kd)[i] = c.kd;
-    (*ks)[i] = c.ks;
-  }
+  // The five sums side by side, as the lane kernel reads them.
+  Eigen::Array<double, kSearchLanes, 5> sums;
+  sums << d, x, s, a, b;
+  const internal::PairSettings p = pair_settings(fixed_ks);
+  internal::SearchLaneKernels().pair(sums.data(), p.prior_weight, p.prior_ks, p.ridge, fixed_ks,
+                                     kd->data(), ks->data());
 }
 
 NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optional<double> ks_prior,
@@ -147,6 +142,8 @@ NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optiona
   keep_ = std::max(refine_, kCoarseTop);
   scores_.reserve(keep_);
   heap_.reserve(keep_);
+  costs_.reserve(keep_);
+  sorted_.reserve(keep_);
 }
 
 void NormalSearch::ScoreRange(int begin, int end, double t, const double* fixed_ks) {
@@ -159,8 +156,8 @@ void NormalSearch::ScoreRange(int begin, int end, double t, const double* fixed_
     // Lanes before `first` hold candidates outside the range: scored, not reported.
     const int offset = first - block * kSearchLanes;
     for (int i = 0; i < kSearchLanes; ++i) lanes[i] = i < offset ? -1 : block * kSearchLanes + i;
-    ScoreBlock(table_.diffuse_block(block), table_.specular_block(block), lanes,
-               last - block * kSearchLanes, t, fixed_ks);
+    ScoreBlock(table_.diffuse_block(block), table_.specular_block(block), table_.sums_block(block),
+               lanes, last - block * kSearchLanes, t, fixed_ks);
   }
 }
 
@@ -185,62 +182,62 @@ void NormalSearch::PackNear() {
   }
 }
 
-void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const int* candidates,
-                              int count, double t, const double* fixed_ks) {
+void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const double* sums,
+                              const int* candidates, int count, double t, const double* fixed_ks) {
   constexpr int W = kSearchLanes;
-  using Lanes = Eigen::Array<float, W, 1>;
-  using Row = Eigen::Map<const Lanes, Eigen::Aligned16>;
-  const bool lobe = table_.has_lobe();
-  // Σ_j y_j d_j and Σ_j y_j s_j over the usable lights, in lanes across the block's candidates
-  // (search_lanes.h), and where the sums cannot come from the table, Σ d², Σ d s, Σ s² too — in
-  // double, as the table's own are: the 2 × 2 system's.
-  const int lit = static_cast<int>(lit_.size());
-  Lanes a = Lanes::Zero(), b = Lanes::Zero();
-  internal::SearchLaneKernels().product(diffuse, specular, lobe, lit_.data(), lit, y_.data(),
-                                        a.data(), b.data());
-  using Wide = WideLanes;
-  Wide dd = Wide::Zero(), dx = Wide::Zero(), ss = Wide::Zero();
-  const auto add = [&](int j, double sign) {
-    const Wide d = Row(diffuse + j * W).cast<double>(), s = Row(specular + j * W).cast<double>();
-    dd += sign * d * d, dx += sign * d * s, ss += sign * s * s;
-  };
+  // Σ d², Σ d s, Σ s² (double, the 2 × 2 system's): a regular block's over every light come
+  // packed with it; otherwise gathered from the table's base, or summed over the usable lights
+  // (the kernel does that when given none).
+  const double* base = nullptr;
   if (from_table_) {
-    // The base's sums less the excluded lights' terms.
-    for (int i = 0; i < count; ++i) {
-      if (candidates[i] < 0) continue;
-      const double* sums = table_.base_sums(base_, candidates[i]);
-      dd[i] = sums[0], dx[i] = sums[1], ss[i] = sums[2];
+    if (sums && base_ < 0) {
+      base = sums;
+    } else {
+      for (int i = 0; i < W; ++i) {
+        const bool in = i < count && candidates[i] >= 0;
+        const double* c = in ? table_.base_sums(base_, candidates[i]) : nullptr;
+        for (int m = 0; m < 3; ++m) gathered_[m * W + i] = in ? c[m] : 0.0;
+      }
+      base = gathered_;
     }
-    for (const int j : excluded_) add(j, -1);
-  } else {
-    for (const int j : lit_) add(j, 1);
   }
-  Wide kd, ks;
-  SolveLanes(dd, dx, ss, a.cast<double>(), b.cast<double>(), fixed_ks, &kd, &ks);
-  const Lanes fkd = kd.cast<float>(), fks = ks.cast<float>();
-  // The censored cost Σ_j max(y_j − kd d_j − ks s_j, −t)² over the usable lights, and by how
-  // much the censoring clips (positive where it censors anything).
-  Lanes cost, clipped;
-  internal::SearchLaneKernels().cost(diffuse, specular, lobe, lit_.data(), lit, y_.data(),
-                                     fkd.data(), fks.data(), static_cast<float>(-t), cost.data(),
-                                     clipped.data());
+  // Then the least-squares pair and the censored cost Σ_j max(y_j − kd d_j − ks s_j, −t)² over
+  // the usable lights, and by how much the censoring clips (positive where it censors anything).
+  internal::BlockScore& score = block_score_;
+  internal::SearchLaneKernels().score(diffuse, specular, table_.has_lobe(), lit_.data(),
+                                      static_cast<int>(lit_.size()), y_.data(), base,
+                                      excluded_.data(), static_cast<int>(excluded_.size()),
+                                      pair_settings(fixed_ks), static_cast<float>(-t), &score);
   // Only the best `keep_` scored so far are kept (no candidate past them can reach the refits or
   // the coarse step's 12), in a heap with the worst on top.
-  const bool full = static_cast<int>(scores_.size()) >= keep_;
-  const float worst = full ? heap_.front().cost : INFINITY;
-  if (full && !(cost < worst).any()) return;
+  if (static_cast<int>(scores_.size()) >= keep_) {
+    const float worst = heap_.front().cost;
+    bool any = false;
+    for (int i = 0; i < W; ++i) any = any || score.cost[i] < worst;
+    if (!any) return;
+  }
   for (int i = 0; i < count; ++i) {
     if (candidates[i] < 0) continue;
-    const Scored scored{cost[i], candidates[i], kd[i], ks[i], clipped[i] > 0};
+    const float cost = score.cost[i];
+    Scored* into = nullptr;
     if (static_cast<int>(scores_.size()) < keep_) {
-      heap_.push_back({cost[i], static_cast<int>(scores_.size())});
-      scores_.push_back(scored);
+      heap_.push_back(MakeSlot(cost, static_cast<int>(scores_.size())));
+      into = &scores_.emplace_back();
       std::push_heap(heap_.begin(), heap_.end());
-    } else if (cost[i] < heap_.front().cost) {
+    } else if (cost < heap_.front().cost) {
       std::pop_heap(heap_.begin(), heap_.end());
-      scores_[heap_.back().slot] = scored;
-      heap_.back().cost = cost[i];
+      into = &scores_[heap_.back().slot];
+      heap_.back() = MakeSlot(cost, heap_.back().slot);
       std::push_heap(heap_.begin(), heap_.end());
+    }
+    if (into) {
+      // Field by field: an entry built aside and copied whole is read back before its parts
+      // have been stored.
+      into->cost = cost;
+      into->candidate = candidates[i];
+      into->kd = score.kd[i];
+      into->ks = score.ks[i];
+      into->censors = score.clipped[i] > 0;
     }
   }
 }
@@ -310,6 +307,39 @@ void NormalSearch::RefitBlock(const int* which, int count, double t, const doubl
   }
 }
 
+void NormalSearch::SortScores(int n, bool final_order) {
+  // The stable order by cost: each entry's place is the count of entries cheaper than it and of
+  // equal ones before it, counted without branches; then the entries are moved once. That is the
+  // order std::sort gives as well on at most 16 entries (libstdc++ sorts so few by insertion,
+  // which is stable) and the final insertion sort gives, so the order before either — each of
+  // which is still taken beyond 16 entries or where a cost is NaN, which orders nothing.
+  costs_.resize(n);
+  bool ordered = n <= 16;
+  for (int i = 0; i < n; ++i) {
+    costs_[i] = static_cast<float>(scores_[i].cost);
+    ordered = ordered && !std::isnan(costs_[i]);
+  }
+  if (!ordered) {
+    if (!final_order) {
+      std::sort(scores_.begin(), scores_.begin() + n);
+      return;
+    }
+    for (int i = 1; i < n; ++i) {
+      for (int j = i; j > 0 && scores_[j].cost < scores_[j - 1].cost; --j)
+        std::swap(scores_[j], scores_[j - 1]);
+    }
+    return;
+  }
+  sorted_.resize(n);
+  const float* c = costs_.data();
+  for (int i = 0; i < n; ++i) {
+    int place = 0;
+    for (int j = 0; j < n; ++j) place += (c[j] < c[i]) | ((c[j] == c[i]) & (j < i));
+    sorted_[place] = scores_[i];
+  }
+  std::copy(sorted_.begin(), sorted_.end(), scores_.begin());
+}
+
 SearchResult NormalSearch::Search(const double* y, const double* usable, double t,
                                   const double* fixed_ks, bool near_last) {
   const int k = table_.lights();
@@ -352,7 +382,7 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
     ScoreRange(table_.fine_count(), table_.size(), t, fixed_ks);
     const int coarse_top = std::min<int>(kCoarseTop, static_cast<int>(scores_.size()));
     // The best 12 in order (of the best `keep_` kept), then the heap again.
-    std::sort(scores_.begin(), scores_.end());
+    SortScores(static_cast<int>(scores_.size()), false);
     last_coarse_.clear();
     for (int i = 0; i < coarse_top; ++i) last_coarse_.push_back(scores_[i].candidate);
     for (std::size_t i = 0; i < scores_.size(); ++i) {
@@ -365,12 +395,12 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
   const std::size_t block = static_cast<std::size_t>(k) * kSearchLanes;
   for (std::size_t i = 0; i < near_.size(); i += kSearchLanes) {
     ScoreBlock(near_diffuse_.data() + (i / kSearchLanes) * block,
-               near_specular_.data() + (i / kSearchLanes) * block, near_.data() + i,
+               near_specular_.data() + (i / kSearchLanes) * block, nullptr, near_.data() + i,
                static_cast<int>(std::min<std::size_t>(kSearchLanes, near_.size() - i)), t,
                fixed_ks);
   }
   const int top = std::min<int>(refine_, static_cast<int>(scores_.size()));
-  std::sort(scores_.begin(), scores_.end());
+  SortScores(static_cast<int>(scores_.size()), false);
   refit_.clear();
   for (int i = 0; i < top; ++i) {
     Scored& s = scores_[i];
@@ -385,12 +415,8 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
                static_cast<int>(std::min<std::size_t>(kSearchLanes, refit_.size() - i)), t,
                fixed_ks);
   }
-  // Insertion sort: stable (ties keep their screening order), and no buffer per search as
-  // std::stable_sort takes; `top` is at most `refine` (16).
-  for (int i = 1; i < top; ++i) {
-    for (int j = i; j > 0 && scores_[j].cost < scores_[j - 1].cost; --j)
-      std::swap(scores_[j], scores_[j - 1]);
-  }
+  // Stable: ties keep their screening order.
+  SortScores(top, true);
   SearchResult best;
   if (top == 0) return best;
   best = {scores_[0].candidate, scores_[0].cost, scores_[0].kd, scores_[0].ks, {-1, -1}};

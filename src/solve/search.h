@@ -21,12 +21,16 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
+#include <cstring>
 #include <optional>
 #include <utility>
 #include <vector>
 
 #include "core/types.h"
 #include "reflectance/phong.h"
+#include "solve/internal.h"
+#include "solve/search_lanes.h"
 
 namespace iphong::solve {
 
@@ -71,9 +75,15 @@ class CandidateTable {
   // The folds given (empty: none), and {Σ d², Σ d s, Σ s²} of candidate c over every light
   // (base −1: the sums of a pixel with no saturated image) or over those outside fold `base`.
   const std::vector<int>& fold() const { return fold_; }
-  int folds() const { return static_cast<int>(fold_sums_.size()); }
+  int folds() const { return static_cast<int>(fold_size_.size()); }
   const double* base_sums(int base, int c) const {
-    return (base < 0 ? sums_.data() : fold_sums_[base].data()) + 3 * static_cast<std::size_t>(c);
+    return base < 0 ? &sums_[3 * static_cast<std::size_t>(c)]
+                    : &fold_sums_[3 * (static_cast<std::size_t>(c) * folds() + base)];
+  }
+  // Block b's sums over every light (base −1), packed as its factors are: Σ d² of its
+  // kSearchLanes candidates, then Σ d s, then Σ s² (zero past size()).
+  const double* sums_block(int b) const {
+    return sums_packed_.data() + 3 * static_cast<std::size_t>(b) * kSearchLanes;
   }
   // The number of lights in fold f.
   int fold_size(int f) const { return fold_size_[f]; }
@@ -83,12 +93,14 @@ class CandidateTable {
   int fine_ = 0;
   std::vector<int> fold_;
   std::vector<int> fold_size_;
-  std::vector<std::vector<double>> fold_sums_;
   std::vector<Vec3d> normals_;
   std::vector<std::vector<int>> members_;
   std::vector<float> diffuse_, specular_, diffuse_packed_, specular_packed_;
   bool has_lobe_ = false;
-  std::vector<double> sums_;
+  std::vector<double> sums_, sums_packed_;
+  // Candidate-major, every fold of a candidate side by side: a pixel's searches on its folds read
+  // the same few candidates' sums, which then stay in cache.
+  std::vector<double> fold_sums_;
 };
 
 struct SearchResult {
@@ -137,10 +149,16 @@ class NormalSearch {
   // Scores candidates [begin, end) — the least-squares coefficients on the usable lights and the
   // censored cost there — and appends them to scores_, a packed block at a time.
   void ScoreRange(int begin, int end, double t, const double* fixed_ks);
-  // Scores the candidates of one packed block (K × kSearchLanes factors), lane i holding
-  // candidate candidates[i] for i < count.
-  void ScoreBlock(const float* diffuse, const float* specular, const int* candidates, int count,
-                  double t, const double* fixed_ks);
+  // Scores the candidates of one packed block (K × kSearchLanes factors, and with `sums` their
+  // sums over every light packed as CandidateTable::sums_block gives them, else nullptr), lane i
+  // holding candidate candidates[i] for i < count.
+  void ScoreBlock(const float* diffuse, const float* specular, const double* sums,
+                  const int* candidates, int count, double t, const double* fixed_ks);
+  // The 2 × 2 solve's settings: the ks prior (none: NonNegativePair's defaults) and the ridge.
+  internal::PairSettings pair_settings(const double* fixed_ks) const {
+    return {ks_prior_ ? prior_weight_ : 0.0, ks_prior_ ? *ks_prior_ : 0.0, internal::kKsRidge,
+            fixed_ks};
+  }
   // Refits the candidates scores_[which[0 … count − 1]] (at most kSearchLanes) together: from
   // the screening's coefficients, the fit with the censoring's weights, and again where that
   // fit censors other observations than the screening's did (two rounds).
@@ -168,6 +186,24 @@ class NormalSearch {
     int slot;  // in scores_
     bool operator<(const Slot& o) const { return cost < o.cost; }
   };
+  // One 8-byte store: the heap reads a slot back whole, and a read of two 4-byte stores as one
+  // waits for them to drain.
+  static Slot MakeSlot(float cost, int slot) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &cost, sizeof bits);
+    const std::uint64_t packed =
+        bits | (static_cast<std::uint64_t>(static_cast<std::uint32_t>(slot)) << 32);
+    Slot out;
+    std::memcpy(&out, &packed, sizeof out);
+    return out;
+  }
+  // Orders scores_[0 … n) by cost, ties in their present order (`final_order`: the refits'
+  // ordering, else the screening's).
+  void SortScores(int n, bool final_order);
+  std::vector<float> costs_;
+  std::vector<Scored> sorted_;
+  double gathered_[3 * kSearchLanes];  // a block's sums gathered from the table
+  internal::BlockScore block_score_;
   std::vector<Scored> scores_;
   std::vector<Slot> heap_;
   int keep_ = 16;

@@ -17,7 +17,19 @@ namespace iphong::solve::internal {
 
 constexpr int kLanes = 8;
 
-// The three loops, compiled for one instruction set.
+// What the screening of one block needs besides its factors and the pixel: the 2 × 2 solve's
+// prior and ridge (internal::NonNegativePair), or a fixed ks.
+struct PairSettings {
+  double prior_weight = 0, prior_ks = 0, ridge = 0;
+  const double* fixed_ks = nullptr;
+};
+// The screening's result for kLanes candidates.
+struct BlockScore {
+  float cost[kLanes], clipped[kLanes];  // as `cost` below gives them, at (kd, ks) in float
+  double kd[kLanes], ks[kLanes];        // the non-negative least squares (`pair`)
+};
+
+// The kernels, compiled for one instruction set.
 struct LaneKernels {
   const char* name;
   // a = Σ_j y_j d_j and, with `lobe`, b = Σ_j y_j s_j (else b is left alone).
@@ -35,6 +47,20 @@ struct LaneKernels {
   void (*weighted_sums)(const float* diffuse, const float* specular, const int* lit, int n,
                         const float* y, const float* kd, const float* ks, float floor,
                         float* weights, float* sums, float* cost, float* changed);
+  // internal::NonNegativePair of kLanes systems, one a lane, from sums[0 … 4] (kLanes each:
+  // D, X, S, A, B) with the prior (prior_weight, prior_ks) and the ridge; with `fixed_ks`
+  // (non-null) kd alone, clamped at 0, and ks = *fixed_ks. Every branch is computed and the
+  // lane's chosen, the same operations in the same order: the same bits as the scalar function.
+  void (*pair)(const double* sums, double prior_weight, double prior_ks, double ridge,
+               const double* fixed_ks, double* kd, double* ks);
+  // The screening of one block, `product`, `pair` and `cost` in one pass: a = Σ y d, b = Σ y s
+  // over the lit lights (float), the 2 × 2 system's Σ d², Σ d s, Σ s² in double — from `base`
+  // (3 × kLanes, those sums over a larger set of lights) less the terms of the `excluded`
+  // lights, or summed over the lit lights where `base` is null — the pair at them, and the
+  // censored cost at that pair rounded to float.
+  void (*score)(const float* diffuse, const float* specular, bool lobe, const int* lit, int n,
+                const float* y, const double* base, const int* excluded, int n_excluded,
+                const PairSettings& pair, float floor, BlockScore* out);
 };
 
 // The baseline's kernels, AVX2's (nullptr off x86-64 or where the processor lacks AVX2), and the

@@ -147,6 +147,148 @@ TEST(Normals, LaneKernelsEqualAPlainLoopBitwise) {
   RecordProperty("variants", static_cast<int>(variants.size()));
 }
 
+// The fused screening kernel (LaneKernels::score) against the search's steps done one by one
+// with scalar code: Σ y d and Σ y s in float, Σ d², Σ d s, Σ s² in double — from a base less the
+// excluded lights' terms, or over the lit lights — internal::NonNegativePair, then the censored
+// cost at the pair rounded to float. Bitwise, with and without a lobe, a prior and a fixed ks.
+TEST(Normals, FusedScreeningEqualsItsStepsBitwise) {
+  constexpr int W = internal::kLanes, K = 19;
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> u(0, 1);
+  std::vector<float> d(K * W), s(K * W), y(K);
+  std::vector<int> lit, excluded;
+  for (int j = 0; j < K; ++j) {
+    (j % 6 == 2 ? excluded : lit).push_back(j);
+    y[j] = j % 5 == 0 ? 0.02f * u(rng) : u(rng);
+    for (int i = 0; i < W; ++i) {
+      d[j * W + i] = (i + 2 * j) % 5 == 0 ? 0.0f : u(rng);
+      s[j * W + i] = (i * j) % 4 == 1 ? 0.0f : std::pow(u(rng), 6.0f);
+    }
+  }
+  // A base over every light, as the table keeps it (double sums of the float factors).
+  double base[3 * W] = {};
+  for (int i = 0; i < W; ++i) {
+    for (int j = 0; j < K; ++j) {
+      const double di = d[j * W + i], si = s[j * W + i];
+      base[i] += di * di, base[W + i] += di * si, base[2 * W + i] += si * si;
+    }
+  }
+  const auto bits = [](const void* p, const void* q, std::size_t n) {
+    return std::memcmp(p, q, n) == 0;
+  };
+  std::vector<const internal::LaneKernels*> variants = {&internal::BaselineLaneKernels()};
+  if (internal::Avx2LaneKernels()) variants.push_back(internal::Avx2LaneKernels());
+  const double fixed = 0.3;
+  for (const bool lobe : {true, false}) {
+    for (const bool from_base : {true, false}) {
+      for (const int settings : {0, 1, 2}) {  // no prior, a prior, a fixed ks
+        internal::PairSettings pair;
+        pair.ridge = internal::kKsRidge;
+        if (settings == 1) pair.prior_weight = 0.7, pair.prior_ks = 0.2;
+        if (settings == 2) pair.fixed_ks = &fixed;
+        const float floor = -0.05f;
+        internal::BlockScore ref;
+        for (int i = 0; i < W; ++i) {
+          float a = 0, b = 0;
+          for (const int j : lit) a += y[j] * d[j * W + i];
+          if (lobe)
+            for (const int j : lit) b += y[j] * s[j * W + i];
+          double dd = 0, dx = 0, ss = 0;
+          if (from_base) dd = base[i], dx = base[W + i], ss = base[2 * W + i];
+          for (const int j : from_base ? excluded : lit) {
+            const double sign = from_base ? -1.0 : 1.0, di = d[j * W + i], si = s[j * W + i];
+            dd += sign * di * di, dx += sign * di * si, ss += sign * si * si;
+          }
+          if (pair.fixed_ks) {
+            ref.kd[i] = dd > 1e-12 ? std::max(0.0, (a - fixed * dx) / dd) : 0.0;
+            ref.ks[i] = fixed;
+          } else {
+            const internal::CoefficientPair<double> c = internal::NonNegativePair<double>(
+                dd, dx, ss, a, b, pair.prior_weight, pair.prior_ks, pair.ridge);
+            ref.kd[i] = c.kd, ref.ks[i] = c.ks;
+          }
+          const float kd = static_cast<float>(ref.kd[i]), ks = static_cast<float>(ref.ks[i]);
+          float cost = 0, clipped = 0;
+          for (const int j : lit) {
+            float r = y[j] - kd * d[j * W + i];
+            if (lobe) r -= ks * s[j * W + i];
+            clipped += floor - r > 0 ? floor - r : 0.0f;
+            const float kept = r > floor ? r : floor;
+            cost += kept * kept;
+          }
+          ref.cost[i] = cost, ref.clipped[i] = clipped;
+        }
+        for (const internal::LaneKernels* v : variants) {
+          internal::BlockScore out;
+          v->score(d.data(), s.data(), lobe, lit.data(), static_cast<int>(lit.size()), y.data(),
+                   from_base ? base : nullptr, excluded.data(), static_cast<int>(excluded.size()),
+                   pair, floor, &out);
+          EXPECT_TRUE(bits(out.kd, ref.kd, sizeof ref.kd) && bits(out.ks, ref.ks, sizeof ref.ks))
+              << v->name << " lobe " << lobe << " base " << from_base << " settings " << settings;
+          EXPECT_TRUE(bits(out.cost, ref.cost, sizeof ref.cost) &&
+                      bits(out.clipped, ref.clipped, sizeof ref.clipped))
+              << v->name << " lobe " << lobe << " base " << from_base << " settings " << settings;
+        }
+      }
+    }
+  }
+}
+
+// The lane kernels' 2 × 2 non-negative solve against internal::NonNegativePair, the scalar
+// function every other fit calls: bitwise equal in every lane, with and without a prior and with
+// a fixed ks, over systems that take each branch (the free solution, either coefficient alone,
+// none, a singular or a nearly collinear system).
+TEST(Normals, LanePairEqualsNonNegativePairBitwise) {
+  constexpr int W = internal::kLanes;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<const internal::LaneKernels*> variants = {&internal::BaselineLaneKernels()};
+  if (internal::Avx2LaneKernels()) variants.push_back(internal::Avx2LaneKernels());
+  const auto bits_equal = [](double p, double q) { return std::memcmp(&p, &q, sizeof p) == 0; };
+  int branches[4] = {0, 0, 0, 0};  // free, kd alone, ks alone, neither
+  for (int trial = 0; trial < 4000; ++trial) {
+    double sums[5 * W];
+    for (int i = 0; i < W; ++i) {
+      // Factors of a few lights, so D, X, S are a real Gram matrix; then the kind of system.
+      double d = 0, x = 0, s = 0, a = 0, b = 0;
+      const int kind = (trial * W + i) % 7;
+      for (int j = 0; j < 5; ++j) {
+        const double dj = kind == 6 ? 0.0 : u(rng);
+        const double sj = kind == 2 ? 0.0 : kind == 3 ? 0.7 * dj : u(rng) * u(rng);
+        const double yj = kind == 4 ? -u(rng) : u(rng);
+        d += dj * dj, x += dj * sj, s += sj * sj, a += dj * yj, b += sj * yj;
+      }
+      if (kind == 5) b = -b;  // the lobe's correlation negative: kd alone
+      sums[i] = d, sums[W + i] = x, sums[2 * W + i] = s, sums[3 * W + i] = a, sums[4 * W + i] = b;
+    }
+    const double prior_weight = trial % 3 == 0 ? 0.0 : u(rng), prior_ks = u(rng);
+    const double fixed = u(rng);
+    for (const internal::LaneKernels* v : variants) {
+      for (const bool with_fixed : {false, true}) {
+        double kd[W], ks[W];
+        v->pair(sums, prior_weight, prior_ks, internal::kKsRidge, with_fixed ? &fixed : nullptr, kd,
+                ks);
+        for (int i = 0; i < W; ++i) {
+          const double d = sums[i], x = sums[W + i], a = sums[3 * W + i];
+          double kd_ref = 0, ks_ref = fixed;
+          if (with_fixed) {
+            kd_ref = d > 1e-12 ? std::max(0.0, (a - fixed * x) / d) : 0.0;
+          } else {
+            const internal::CoefficientPair<double> c = internal::NonNegativePair(
+                d, x, sums[2 * W + i], a, sums[4 * W + i], prior_weight, prior_ks);
+            kd_ref = c.kd, ks_ref = c.ks;
+            ++branches[(c.kd > 0 && c.ks > 0) ? 0 : c.kd > 0 ? 1 : c.ks > 0 ? 2 : 3];
+          }
+          ASSERT_TRUE(bits_equal(kd[i], kd_ref) && bits_equal(ks[i], ks_ref))
+              << v->name << " trial " << trial << " lane " << i << ": " << kd[i] << " " << ks[i]
+              << " against " << kd_ref << " " << ks_ref;
+        }
+      }
+    }
+  }
+  for (int branch = 0; branch < 4; ++branch) EXPECT_GT(branches[branch], 100) << branch;
+}
+
 // Each fine candidate of the search's table belongs to its nearest coarse direction, exactly as
 // comparing it with every coarse direction finds (the table compares only a band of z).
 TEST(Normals, CandidateTableGroupsEachDirectionWithItsNearestCoarseOne) {
