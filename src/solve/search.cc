@@ -144,6 +144,8 @@ NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optiona
   heap_.reserve(keep_);
   costs_.reserve(keep_);
   sorted_.reserve(keep_);
+  rank_.reserve(keep_);
+  order_.reserve(keep_);
 }
 
 void NormalSearch::ScoreRange(int begin, int end, double t, const double* fixed_ks) {
@@ -400,36 +402,84 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
                fixed_ks);
   }
   const int top = std::min<int>(refine_, static_cast<int>(scores_.size()));
-  SortScores(static_cast<int>(scores_.size()), false);
+  RefitAndOrder(top, t, fixed_ks);
+  SearchResult best;
+  if (top == 0) return best;
+  const Scored& first = scores_[order_[0]];
+  best = {first.candidate, first.cost, first.kd, first.ks, {-1, -1}};
+  // A held-out fold's search (near_last) is read for its winner alone.
+  if (near_last) return best;
+  const double apart = std::cos(kOtherBasinDeg * M_PI / 180);
+  std::size_t found = 0;
+  for (int i = 1; i < top && found < best.others.size(); ++i) {
+    const Vec3d& n = table_.normal(scores_[order_[i]].candidate);
+    bool distinct = n.dot(table_.normal(best.candidate)) < apart;
+    for (std::size_t o = 0; o < found; ++o)
+      distinct = distinct && n.dot(table_.normal(best.others[o])) < apart;
+    if (distinct) best.others[found++] = scores_[order_[i]].candidate;
+  }
+  return best;
+}
+
+void NormalSearch::RefitAndOrder(int top, double t, const double* fixed_ks) {
+  const int n = static_cast<int>(scores_.size());
+  // The screening's stable order, its best `top` refitted, and those ordered by their refitted
+  // cost, ties in screening order. A refit's result does not depend on which others share its
+  // block (each lane is its own), so the entries need not be moved in between: one place count
+  // on (screening cost, position) and one on (refitted cost, screening place). Beyond 16
+  // entries or with a NaN cost the two sorts are made as such (SortScores).
+  bool counted = n <= 16;
+  for (int i = 0; i < n && counted; ++i) counted = !std::isnan(static_cast<float>(scores_[i].cost));
+  rank_.resize(n);
+  order_.resize(n);
+  costs_.resize(n);
+  if (counted) {
+    for (int i = 0; i < n; ++i) costs_[i] = static_cast<float>(scores_[i].cost);
+    const float* c = costs_.data();
+    for (int i = 0; i < n; ++i) {
+      int place = 0;
+      for (int j = 0; j < n; ++j) place += (c[j] < c[i]) | ((c[j] == c[i]) & (j < i));
+      rank_[i] = place;
+    }
+  } else {
+    SortScores(n, false);
+    for (int i = 0; i < n; ++i) rank_[i] = i;
+  }
   refit_.clear();
-  for (int i = 0; i < top; ++i) {
-    Scored& s = scores_[i];
+  for (int i = 0; i < n; ++i) {
     // From the screening's least-squares coefficients, two rounds of the censoring's weights
     // (the second only when the first changed which observations are censored). Where the
     // screening's fit censors nothing, the first round's weights are the usable lights: its fit
     // is the screening's own, and nothing would change.
-    if (s.censors) refit_.push_back(i);
+    if (rank_[i] < top && scores_[i].censors) refit_.push_back(i);
   }
   for (std::size_t i = 0; i < refit_.size(); i += kSearchLanes) {
     RefitBlock(refit_.data() + i,
                static_cast<int>(std::min<std::size_t>(kSearchLanes, refit_.size() - i)), t,
                fixed_ks);
   }
-  // Stable: ties keep their screening order.
-  SortScores(top, true);
-  SearchResult best;
-  if (top == 0) return best;
-  best = {scores_[0].candidate, scores_[0].cost, scores_[0].kd, scores_[0].ks, {-1, -1}};
-  const double apart = std::cos(kOtherBasinDeg * M_PI / 180);
-  std::size_t found = 0;
-  for (int i = 1; i < top && found < best.others.size(); ++i) {
-    const Vec3d& n = table_.normal(scores_[i].candidate);
-    bool distinct = n.dot(table_.normal(best.candidate)) < apart;
-    for (std::size_t o = 0; o < found; ++o)
-      distinct = distinct && n.dot(table_.normal(best.others[o])) < apart;
-    if (distinct) best.others[found++] = scores_[i].candidate;
+  for (int i = 0; i < n && counted; ++i) {
+    costs_[i] = static_cast<float>(scores_[i].cost);
+    counted = !std::isnan(costs_[i]);
   }
-  return best;
+  if (counted) {
+    const float* c = costs_.data();
+    for (int i = 0; i < n; ++i) {
+      if (rank_[i] >= top) continue;
+      int place = 0;
+      for (int j = 0; j < n; ++j) {
+        place += (rank_[j] < top) & ((c[j] < c[i]) | ((c[j] == c[i]) & (rank_[j] < rank_[i])));
+      }
+      order_[place] = i;
+    }
+    return;
+  }
+  // The entries moved into screening order, then the refits' order by insertion (stable).
+  sorted_.resize(n);
+  for (int i = 0; i < n; ++i) sorted_[rank_[i]] = scores_[i];
+  std::copy(sorted_.begin(), sorted_.end(), scores_.begin());
+  SortScores(top, true);
+  for (int i = 0; i < n; ++i) order_[i] = i;
 }
 
 namespace {

@@ -200,8 +200,12 @@ class NormalSearch {
   // Orders scores_[0 … n) by cost, ties in their present order (`final_order`: the refits'
   // ordering, else the screening's).
   void SortScores(int n, bool final_order);
+  // Refits the best `top` of the scored (in screening order) and leaves order_[0 … top) the
+  // indices of scores_ by refitted cost, ties in screening order.
+  void RefitAndOrder(int top, double t, const double* fixed_ks);
   std::vector<float> costs_;
   std::vector<Scored> sorted_;
+  std::vector<int> rank_, order_;
   double gathered_[3 * kSearchLanes];  // a block's sums gathered from the table
   internal::BlockScore block_score_;
   std::vector<Scored> scores_;
