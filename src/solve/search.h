@@ -21,6 +21,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <optional>
@@ -189,10 +190,16 @@ class NormalSearch {
   // One 8-byte store: the heap reads a slot back whole, and a read of two 4-byte stores as one
   // waits for them to drain.
   static Slot MakeSlot(float cost, int slot) {
+    static_assert(sizeof(Slot) == 8 && offsetof(Slot, slot) == 4, "cost, then slot");
     std::uint32_t bits;
     std::memcpy(&bits, &cost, sizeof bits);
-    const std::uint64_t packed =
-        bits | (static_cast<std::uint64_t>(static_cast<std::uint32_t>(slot)) << 32);
+    const std::uint64_t low = bits, high = static_cast<std::uint32_t>(slot);
+    // The field at the lower address in the 64-bit word's low half on a little-endian machine.
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+    const std::uint64_t packed = (low << 32) | high;
+#else
+    const std::uint64_t packed = low | (high << 32);
+#endif
     Slot out;
     std::memcpy(&out, &packed, sizeof out);
     return out;
