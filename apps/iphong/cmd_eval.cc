@@ -95,6 +95,12 @@ void RunEval(const EvalOptions& o) {
     throw std::runtime_error(o.estimate + ": " + e.what() + " (" + truth_name +
                              (o.mask.empty() ? "" : ", mask " + o.mask) + ")");
   }
+  if (m.not_finite > 0) {  // counted as missing normals, as a 0 is: a mean of 180° is no method's
+    Warn(o.estimate + ": " + std::to_string(m.not_finite) + " of " + std::to_string(m.pixels) +
+         " pixels with ground truth hold no finite normal (NaN or infinite; the first at column " +
+         std::to_string(m.first_not_finite % truth.width) + ", row " +
+         std::to_string(m.first_not_finite / truth.width) + "): scored as missing, 180 degrees");
+  }
   if (!o.error_map.empty()) {
     io::WriteSingleOutputFile("eval", o.error_map, o.common.overwrite,
                               {o.estimate, o.ground_truth, o.mask}, [&](const std::string& temp) {

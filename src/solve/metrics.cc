@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace iphong::solve {
 
@@ -23,13 +24,22 @@ AngularErrorMetrics CompareNormals(const ImageF& estimate, const ImageF& ground_
     const float* g = ground_truth.pixels.data() + p * ground_truth.channels;
     const Vec3d a(e[0], e[1], e[2]), b(g[0], g[1], g[2]);
     if (!(b.norm() > 0.5)) continue;  // no ground truth here
+    if (!a.allFinite() && m.not_finite++ == 0) m.first_not_finite = p;
     const double na = a.norm();
     // atan2 of |a×b| and a·b is accurate for tiny angles, where acos loses digits.
-    const double angle = na > 0 ? std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI : 180.0;
+    const double angle =
+        na > 0 && a.allFinite() ? std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI : 180.0;
     errors.push_back(angle);
     m.error_deg.pixels[p] = static_cast<float>(angle);
   }
   if (errors.empty()) throw std::invalid_argument("no pixel has both an estimate and ground truth");
+  if (m.not_finite == errors.size()) {
+    throw std::invalid_argument(
+        "holds no finite normal where the ground truth has one (NaN or infinite at all " +
+        std::to_string(errors.size()) + " such pixels; the first at column " +
+        std::to_string(m.first_not_finite % estimate.width) + ", row " +
+        std::to_string(m.first_not_finite / estimate.width) + ")");
+  }
   m.pixels = errors.size();
   double sum = 0;
   for (double e : errors) {

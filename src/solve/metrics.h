@@ -16,11 +16,17 @@ struct AngularErrorMetrics {
   double below_5_deg = 0;  // fraction of pixels
   double below_10_deg = 0;
   double below_20_deg = 0;
+  // Evaluated pixels whose estimate is not finite (NaN or infinite: other tools write NaN where
+  // they found no normal), scored as missing (180°) as a zero estimate is; the first of them
+  // (row-major pixel index) when there are any.
+  std::size_t not_finite = 0;
+  std::size_t first_not_finite = 0;
   ImageF error_deg;  // 1 channel, 0 outside the evaluated pixels
 };
 
 // Over the pixels inside `mask` where the ground truth is a non-zero vector. Both maps are
-// 3-channel xyz. Throws std::invalid_argument on size mismatch or an empty evaluation set.
+// 3-channel xyz. Throws std::invalid_argument on size mismatch, an empty evaluation set or an
+// estimate with no finite normal on it.
 AngularErrorMetrics CompareNormals(const ImageF& estimate, const ImageF& ground_truth,
                                    const Mask& mask);
 

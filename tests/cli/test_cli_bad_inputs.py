@@ -545,6 +545,34 @@ def test_a_ground_truth_beside_every_solved_pixel_is_named_not_fatal(rendered, t
     assert not (tmp_path / "out" / "error.png").exists()
 
 
+def test_eval_names_normals_that_are_not_finite(rendered, tmp_path):
+    """Other tools write NaN where they found no normal. Scored as missing (180 degrees, as a 0
+    is) with a warning that counts them; a map with no finite normal where the ground truth has
+    one is refused: its mean of 180 degrees was printed as a result."""
+    exact = rendered / "normals.exr"
+    code, out, err = run("eval", exact, rendered)
+    assert code == 0 and err == "", err
+    assert json.loads(out)["mean_angular_error_deg"] < 0.01
+    holes = tmp_path / "holes.exr"
+    subprocess.run(["oiiotool", str(exact), "--crop", "8x8+44+44", "--mulc", "nan", str(exact),
+                    "--paste", "+0+0", "-o", str(holes)], check=True)
+    code, out, err = run("eval", holes, rendered)
+    assert code == 0, err
+    metrics = json.loads(out)
+    (line,) = err.splitlines()
+    assert line.startswith(f"iphong: warning: {holes}: 64 of {metrics['evaluated_pixels']} pixels "
+                           "with ground truth hold no finite normal (NaN or infinite; the first "
+                           "at column 44, row 44): scored as missing, 180 degrees"), line
+    assert metrics["mean_angular_error_deg"] == pytest.approx(
+        180 * 64 / metrics["evaluated_pixels"], abs=0.01)
+    nothing = tmp_path / "nothing.exr"
+    subprocess.run(["oiiotool", str(exact), "--mulc", "nan", "-o", str(nothing)], check=True)
+    assert_refused(tmp_path, ["eval", nothing, rendered, "--error-map", tmp_path / "e.png"], 1,
+                   r"holds no finite normal where the ground truth has one \(NaN or infinite at "
+                   r"all \d+ such pixels; the first at column \d+, row \d+\)", str(nothing))
+    assert not (tmp_path / "e.png").exists()
+
+
 def test_text_files_from_windows_editors_are_read(rendered, tmp_path):
     """A UTF-8 byte-order mark and CRLF line ends are what Notepad writes: not an error."""
     ds = user_copy(rendered, tmp_path / "ds")

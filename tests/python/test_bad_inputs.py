@@ -218,3 +218,20 @@ def test_a_huge_array_is_refused_with_the_figure_before_it_is_copied():
                                          r"the memory limit of 10 MB \(raise it with max_memory_gb=\)"):
         iphong.integrate(huge[:400, :400], max_memory_gb=0.01)
     assert iphong.integrate(huge[:400, :400])["height"].shape == (400, 400)
+
+
+def test_angular_error_counts_estimates_that_are_not_finite():
+    """NaN where another tool found no normal: a missing normal (180 degrees), counted and warned
+    of; an estimate with no finite normal is refused, not scored 180."""
+    truth = np.zeros((2, 3, 3), np.float32)
+    truth[..., 2] = 1
+    estimate = truth.copy()
+    estimate[0, 1] = np.nan
+    with pytest.warns(UserWarning, match=r"1 of 6 pixels with ground truth hold no finite normal"):
+        m = iphong.angular_error(estimate, truth)
+    assert m["not_finite_pixels"] == 1 and m["evaluated_pixels"] == 6
+    assert m["mean_angular_error_deg"] == pytest.approx(30.0)
+    assert m["error_deg"][0, 1] == 180
+    with pytest.raises(ValueError, match=r"holds no finite normal where the ground truth has one "
+                                         r"\(NaN or infinite at all 6 such pixels"):
+        iphong.angular_error(np.full_like(truth, np.inf), truth)

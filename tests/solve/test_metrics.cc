@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 
 #include "solve/metrics.h"
 
@@ -25,6 +27,34 @@ TEST(Metrics, KnownAnglesAndFractions) {
   EXPECT_DOUBLE_EQ(m.below_10_deg, 0.5);
   EXPECT_DOUBLE_EQ(m.below_20_deg, 0.75);
   EXPECT_NEAR(m.error_deg.pixels[3], 30, 1e-5);
+}
+
+// Other tools write NaN where they found no normal: such a pixel is a missing normal (180°, as a
+// zero estimate is), counted; an infinite component too, not a NaN angle in the mean; a map with
+// no finite normal on the evaluated pixels is refused.
+TEST(Metrics, NonFiniteEstimatesAreMissingNormalsCounted) {
+  ImageF gt(4, 1, 3), est(4, 1, 3);
+  for (int i = 0; i < 4; ++i) gt.pixels[3 * i + 2] = est.pixels[3 * i + 2] = 1;
+  gt.pixels[3 * 1 + 2] = 0;  // no ground truth at pixel 1: not evaluated, whatever the estimate
+  est.pixels[3 * 1] = std::numeric_limits<float>::quiet_NaN();
+  est.pixels[3 * 2] = std::numeric_limits<float>::quiet_NaN();
+  est.pixels[3 * 3 + 1] = std::numeric_limits<float>::infinity();
+  const AngularErrorMetrics m = CompareNormals(est, gt, Mask(4, 1, true));
+  EXPECT_EQ(m.pixels, 3u);
+  EXPECT_EQ(m.not_finite, 2u);
+  EXPECT_EQ(m.first_not_finite, 2u);
+  EXPECT_NEAR(m.mean_deg, (0 + 180 + 180) / 3.0, 1e-9);
+  EXPECT_EQ(m.error_deg.pixels[3], 180.0f);
+  ImageF nan(4, 1, 3);
+  for (float& v : nan.pixels) v = std::numeric_limits<float>::quiet_NaN();
+  try {
+    CompareNormals(nan, gt, Mask(4, 1, true));
+    FAIL() << "an estimate of NaN everywhere was scored";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(),
+                 "holds no finite normal where the ground truth has one (NaN or infinite at all 3 "
+                 "such pixels; the first at column 0, row 0)");
+  }
 }
 
 }  // namespace
