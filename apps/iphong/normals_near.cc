@@ -98,6 +98,50 @@ void CheckLightsOutsideSurface(const io::NearLightFiles& files, const near::Near
   }
 }
 
+// An LED whose axis faces away from every point of the surface (a·(X − S) ≤ 0 at each) gives it
+// no light under the model, so its photo must be dark. Lit, it says the axis is the wrong way
+// round (light_axes.txt gives the way each LED points, toward what it lights) or another light's:
+// the fit would explain a lit photo by a light that sends nothing. "Lit": its mean inside the mask
+// at least a quarter of the median photo's, as no shadow darkens a whole photo that much less
+// than its own light's fall-off allows.
+void CheckLedAxesFaceTheObject(const io::NearLightFiles& files, const near::NearResult& r,
+                               const solve::PhotometricData& observations) {
+  if (files.axes.empty() || files.anisotropy.empty()) return;
+  const int k = observations.images;
+  std::vector<double> mean(k, 0.0);
+  for (std::size_t i = 0; i < observations.pixels.size(); ++i) {
+    for (int j = 0; j < k; ++j) {
+      const float* v = observations.values.data() + (i * k + j) * 3;
+      mean[j] += double(v[0]) + v[1] + v[2];
+    }
+  }
+  std::vector<double> sorted = mean;
+  std::nth_element(sorted.begin(), sorted.begin() + k / 2, sorted.end());
+  const double median = sorted[k / 2];
+  if (!(median > 0)) return;
+  for (int j = 0; j < k; ++j) {
+    if (!(files.anisotropy[j] > 0) || mean[j] < 0.25 * median) continue;
+    const Vec3d& s = files.positions_mm[j];
+    const Vec3d& axis = files.axes[j];
+    double best = -INFINITY;  // the largest cosine between the axis and a direction to the surface
+    for (std::size_t p = 0; p < r.depth.pixels.size(); ++p) {
+      if (!(r.depth.pixels[p] > 0)) continue;
+      const float* x = r.points.pixels.data() + 3 * p;
+      const Vec3d to = Vec3d(x[0], x[1], x[2]) - s;
+      if (to.norm() > 0) best = std::max(best, axis.dot(to.normalized()));
+    }
+    if (best > 0 || best == -INFINITY) continue;
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "LED %d's axis points away from the object (%.0f deg or more from every "
+                  "direction toward its surface), so it would light nothing, yet its photo is "
+                  "lit: an axis gives the way the LED points, toward the object (negated?)",
+                  j + 1, std::acos(std::clamp(best, -1.0, 1.0)) * 180 / M_PI);
+    throw std::runtime_error(files.axes_path + ":" + std::to_string(files.axis_lines[j]) + ": " +
+                             text);
+  }
+}
+
 }  // namespace
 
 NearRun SolveNearCapture(const NormalsCommandOptions& o, const io::Dataset& d,
@@ -123,6 +167,21 @@ NearRun SolveNearCapture(const NormalsCommandOptions& o, const io::Dataset& d,
     throw std::runtime_error(o.dataset + ": " + e.what());
   }
   CheckLightsOutsideSurface(d.files.near, run.result, run.frame, d.mask);
+  CheckLedAxesFaceTheObject(d.files.near, run.result, observations);
+  // A lens's optical centre lies inside its barrel: nothing a camera images is nearer to it than
+  // about a centimetre. Nearer, the positions are in other units than millimetres (metres read
+  // as millimetres put the rig 1000 times nearer). The normals do not see that scale, as far as
+  // nothing known (material.json's coefficients, the intensities) fixes it; the depth and the
+  // mesh do.
+  if (run.frame.perspective && run.result.distance < 10) {
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  ": the object comes out %.3g mm from the camera, nearer than any lens images: "
+                  "are the positions in millimetres (metres read as millimetres put it 1000 "
+                  "times nearer)? The depth and mesh are in those units",
+                  run.result.distance);
+    Warn(d.files.near.positions_path + text);
+  }
   if (run.result.distance_from_images) {
     std::string others;
     for (double other : run.result.other_distances) {

@@ -29,6 +29,7 @@ struct NearLightFiles {
   CameraIntrinsics camera;
   std::string axes_path, anisotropy_path;  // "" = none
   std::vector<Vec3d> axes;                 // unit; empty = none
+  std::vector<int> axis_lines;             // each axis's line in light_axes.txt
   std::vector<double> anisotropy;          // empty = all 0
   std::string depth_gt_path;               // "" = none
 

@@ -202,11 +202,22 @@ def light_inside_the_object(ds):
     return r"light 4 is inside or behind the object", "ds/light_positions.txt:4"
 
 
+def axes_negated(ds):
+    # Axes given the way toward the LED instead of the way it points: no LED would light the
+    # object, yet every photo is lit.
+    lines = (ds / "light_axes.txt").read_text().splitlines()
+    (ds / "light_axes.txt").write_text(
+        "".join(" ".join(str(-float(v)) for v in line.split()) + "\n" for line in lines))
+    return r"LED 1's axis points away from the object \(\d+ deg or more from every direction " \
+        r"toward its surface\), so it would light nothing, yet its photo is lit", \
+        "ds/light_axes.txt:1"
+
+
 @pytest.mark.parametrize("case", [
     wrong_count, behind_the_camera, another_frame, no_camera, camera_without_intrinsics,
     camera_not_json, negative_focal_length, directions_of_other_lights, zero_axis,
     anisotropy_without_axes, negative_anisotropy, nan_position, truncated_depth,
-    light_at_the_surface, light_inside_the_object])
+    light_at_the_surface, light_inside_the_object, axes_negated])
 def test_bad_near_light_files(rendered, tmp_path, case):
     ds = tmp_path / "ds"
     user_copy(rendered, ds)
@@ -214,6 +225,28 @@ def test_bad_near_light_files(rendered, tmp_path, case):
     assert_refused(tmp_path, ["normals", "ds", "-o", "out", "--model", "lambert"], 1, pattern,
                    names, cwd=tmp_path)
     assert not (tmp_path / "out").exists()
+
+
+def test_positions_in_metres_are_said(rendered, tmp_path):
+    """Positions in metres read as millimetres: the same images from a rig 1000 times smaller,
+    which the normals do not see (a perspective camera has no scale of its own) but the depth and
+    the mesh do. An object 0.46 mm from the camera is nearer than any lens images: said."""
+    ds = user_copy(rendered, tmp_path / "ds")
+    lines = (ds / "light_positions.txt").read_text().splitlines()
+    (ds / "light_positions.txt").write_text(
+        "".join(" ".join(f"{float(v) / 1000:.9g}" for v in line.split()) + "\n"
+                for line in lines))
+    code, out, err = run("normals", ds, "-o", tmp_path / "out", "--ignore-material", "--json")
+    assert code == 0, err
+    near = json.loads(out)["near_lights"]
+    assert near["distance_mm"] == pytest.approx(0.4643, abs=0.002)
+    said = [line for line in err.splitlines() if "nearer than any lens images" in line]
+    assert said == [f"iphong: warning: {ds}/light_positions.txt: the object comes out 0.464 mm "
+                    "from the camera, nearer than any lens images: are the positions in "
+                    "millimetres (metres read as millimetres put it 1000 times nearer)? The "
+                    "depth and mesh are in those units"], err
+    code, _, err = run("normals", rendered, "-o", tmp_path / "mm", "--ignore-material")
+    assert code == 0 and "nearer than any lens" not in err
 
 
 def test_distance_is_for_near_captures(tmp_path):
