@@ -129,8 +129,7 @@ fs::path FindLightFile(const fs::path& dir, const std::vector<std::string>& file
 fs::path ResolveLpImage(const std::string& name, const fs::path& lp, const fs::path& dir) {
   fs::path found = ResolveListedImage(name, lp, dir);
   if (found.empty()) {
-    Fail(lp, "names " + name + ", which is in neither " + lp.parent_path().string() + " nor " +
-                 dir.string());
+    Fail(lp, ListedImageMissing(name, lp, dir));
   }
   return found;
 }

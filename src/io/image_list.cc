@@ -49,6 +49,16 @@ bool LooksLikeImageList(const fs::path& file) {
   }
 }
 
+std::string ListedImageMissing(const std::string& name, const fs::path& list,
+                               const fs::path& capture_dir) {
+  const fs::path here = list.parent_path();
+  std::error_code error;
+  const bool same = here == capture_dir || fs::equivalent(here, capture_dir, error);
+  return "names " + name + ", which is " +
+         (same ? "not in " + capture_dir.string()
+               : "in neither " + here.string() + " nor " + capture_dir.string());
+}
+
 ImageList ReadImageList(const fs::path& list, const fs::path& capture_dir) {
   ImageList out;
   out.path = list.string();
@@ -76,9 +86,8 @@ ImageList ReadImageList(const fs::path& list, const fs::path& capture_dir) {
     const std::string& name = entries[i];
     const fs::path found = ResolveListedImage(name, list, capture_dir);
     if (found.empty()) {
-      throw std::runtime_error(out.path + ":" + std::to_string(lines[i]) + ": names " + name +
-                               ", which is in neither " + list.parent_path().string() + " nor " +
-                               capture_dir.string());
+      throw std::runtime_error(out.path + ":" + std::to_string(lines[i]) + ": " +
+                               ListedImageMissing(name, list, capture_dir));
     }
     if (MaskNameRank(found.filename().string()) >= 0) {
       if (++masks > 1) {

@@ -32,5 +32,9 @@ ImageList ReadImageList(const std::filesystem::path& list,
 // lists paths from the course's folder). Empty when none exists.
 std::filesystem::path ResolveListedImage(const std::string& name, const std::filesystem::path& list,
                                          const std::filesystem::path& capture_dir);
+// "names NAME, which is not in DIR" (or "in neither LIST_DIR nor DIR"): the error when
+// ResolveListedImage finds nothing, naming each folder it looked in once.
+std::string ListedImageMissing(const std::string& name, const std::filesystem::path& list,
+                               const std::filesystem::path& capture_dir);
 
 }  // namespace iphong::io
