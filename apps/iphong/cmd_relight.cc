@@ -166,21 +166,27 @@ void AddRelightCommand(CLI::App& app) {
                   "Folder with normals.exr and albedo.exr (and material.json, specular.exr)")
       ->required();
   cmd->add_option("--light", o->lights,
-                  "Light direction lx,ly,lz (camera frame, toward the light; repeat for more)")
+                  "Light direction lx,ly,lz or lx ly lz (camera frame, toward the light; repeat "
+                  "for more)")
       ->required()
       ->delimiter(',')
-      ->allow_extra_args(false)
+      // lx,ly,lz or lx ly lz: "--light 0 0 1" read one number and called the rest stray
+      // arguments. Grouped in threes by RunRelight.
+      ->expected(1, CLI::detail::expected_max_vector_size)
+      ->allow_extra_args(true)
       // Each comma-separated piece, before conversion: "0 0 1" gets the flag's own hint.
       ->check(CLI::Validator(
           [](std::string& text) -> std::string {
             double v = 0;
             if (CLI::detail::lexical_cast(text, v)) return "";
-            return "takes lx,ly,lz, numbers separated by commas (got '" + text +
-                   "'; repeat the flag for more lights)";
+            return "takes lx,ly,lz: three numbers, separated by commas or as three arguments "
+                   "(got '" +
+                   text + "'; repeat the flag for more lights)";
           },
           "NUMBER"));
-  cmd->add_option("--intensity", o->intensity, "Light intensity: one number or r,g,b")
+  cmd->add_option("--intensity", o->intensity, "Light intensity: one number, or r,g,b or r g b")
       ->delimiter(',')
+      ->expected(1, 3)
       ->capture_default_str();
   cmd->add_option("--material", o->material,
                   "material.json to shade with (default: the folder's; e.g. a fit-material "

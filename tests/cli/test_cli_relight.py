@@ -135,9 +135,21 @@ def test_bad_inputs(capture, tmp_path):
     assert_refused(tmp_path, ["relight", tmp_path / "empty", "--light", "0,0,1", "-o", out], 1,
                    r"normals.exr: no such file")
     assert_refused(tmp_path, ["relight", n, "--light", "0,0,0", "-o", out], 2, r"--light")
-    # Spaces for commas: the flag's own hint, not CLI11's "Could not convert".
+    # One argument holding spaces: the flag's own hint, not CLI11's "Could not convert".
     assert_refused(tmp_path, ["relight", n, "--light", "0 0 1", "-o", out], 2,
-                   r"--light: takes lx,ly,lz, numbers separated by commas \(got '0 0 1'")
+                   r"--light: takes lx,ly,lz: three numbers, separated by commas or as three "
+                   r"arguments \(got '0 0 1'")
+    # Three arguments are a light as lx,ly,lz is (they read one number and called the rest stray
+    # arguments), the same image; a count that is no multiple of three is said.
+    code, _, err = run("relight", n, "--light", "0.3", "-0.2", "0.93", "--intensity", "2", "2",
+                       "2", "-o", tmp_path / "spaces.png")
+    assert code == 0, err
+    code, _, err = run("relight", n, "--light", "0.3,-0.2,0.93", "--intensity", "2", "-o",
+                       tmp_path / "commas.png")
+    assert code == 0, err
+    assert (tmp_path / "spaces.png").read_bytes() == (tmp_path / "commas.png").read_bytes()
+    assert_refused(tmp_path, ["relight", n, "--light", "0", "0", "1", "1", "-o", out], 2,
+                   r"--light: takes lx,ly,lz \(repeat it for more lights\)")
     assert_refused(tmp_path, ["relight", n, "--light", "0,0,1", "-o", tmp_path / "x.jpg"], 2,
                    r"\.png .*or \.exr")
     assert_refused(tmp_path, ["relight", n, "--light", "0,0,1", "--viewer", "-o", out], 2,
