@@ -198,7 +198,7 @@ void AddIntegrateCommand(CLI::App& app) {
   cmd->add_option("--depth-prior", o->depth_prior,
                   "1-channel EXR of known heights (or depths with --intrinsics), NaN = unknown");
   cmd->add_option("--prior-weight", o->options.prior_weight, "Weight of the depth prior per pixel")
-      ->check(Positive())
+      ->check(Scale())
       ->capture_default_str();
   cmd->add_option("--min-cos", o->options.min_cos,
                   "Grazing guard: smallest cosine between normal and view")

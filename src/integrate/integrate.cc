@@ -56,7 +56,11 @@ std::string IntegrateOptions::Validate() const {
   }
   if (depth_prior.channels != 0) {
     if (depth_prior.channels != 1) return "the depth prior must have one channel";
-    if (!(prior_weight > 0) || !std::isfinite(prior_weight)) return "prior weight must be > 0";
+    // Beyond 1e12 the normals' unit weights fall below the sums' precision, and the squares the
+    // solvers form overflow long before double's range: 1e300 gave heights of 0 everywhere.
+    if (!geometry::ScaleInRange(prior_weight)) {
+      return "prior weight must be between 1e-12 and 1e12";
+    }
     if (method == Method::kDct || method == Method::kFft) {
       return "a depth prior needs the quadratic or bilateral method";
     }

@@ -337,6 +337,9 @@ def small_height(tmp_path_factory):
     # Infinite heights and an empty mesh behind exit 0, before the range.
     (["integrate", "ds/normals.exr", "-o", "out", "--pixel-size", "1e308"], 2,
      r"--pixel-size: must be a number between 1e-12 and 1e12 \(got 1e308\)"),
+    # Heights of 0 everywhere behind exit 0: the solvers' squares overflowed.
+    (["integrate", "ds/normals.exr", "-o", "out", "--depth-prior", "small.exr", "--prior-weight",
+      "1e300"], 2, r"--prior-weight: must be a number between 1e-12 and 1e12 \(got 1e300\)"),
 ])
 def test_bad_command_line(rendered, small_height, tmp_path, args, code, pattern):
     user_copy(rendered, tmp_path / "ds")

@@ -481,6 +481,31 @@ TEST(Integrate, OrthographicPriorFixesOffsetAndPixelSizeScales) {
   }
 }
 
+// The prior's weight is a scale within 1e-12..1e12: at the top the heights are the prior's
+// wherever it is given (a plane that the sphere's normals contradict), beyond it refused (1e300
+// gave heights of 0 everywhere, the solvers' squares overflowing).
+TEST(Integrate, PriorWeightAtTheTopOfItsRangeIsFollowedBeyondItRefused) {
+  const Synthetic s = MakeSynthetic(60, 60, SphereCap(60),
+                                    [](double x, double y) { return x * x + y * y < 25 * 25; });
+  IntegrateOptions options;
+  options.depth_prior = ImageF(60, 60, 1, NAN);
+  for (int r = 0; r < 60; ++r)
+    for (int c = 0; c < 60; ++c) *options.depth_prior.at(c, r) = static_cast<float>(0.25 * c + 3);
+  options.prior_weight = 1e12;
+  EXPECT_EQ(options.Validate(), "");
+  const IntegrateResult result = IntegrateNormals(s.normals, s.mask, options);
+  double worst = 0;
+  for (int r = 0; r < 60; ++r)
+    for (int c = 0; c < 60; ++c)
+      if (s.mask.at(c, r))
+        worst = std::max(worst, std::abs(*result.height.at(c, r) - (0.25 * c + 3)));
+  EXPECT_LT(worst, 1e-3);
+  options.prior_weight = 1e13;
+  EXPECT_EQ(options.Validate(), "prior weight must be between 1e-12 and 1e12");
+  options.prior_weight = 1e300;
+  EXPECT_THROW(IntegrateNormals(s.normals, s.mask, options), std::invalid_argument);
+}
+
 // Seed 003: one light at 45° over a cylinder; the two closed-form normals per pixel, the true
 // branch picked, then the line integral gives the profile back.
 TEST(Integrate, Seed003CylinderLineIntegral) {
