@@ -109,7 +109,15 @@ void AddCaptureOptions(CLI::App* cmd, CaptureFlags& f) {
 
 io::CaptureOptions CaptureFlags::resolved() const {
   io::CaptureOptions o = options;
-  if (crop.size() == 4) o.crop = {crop[0], crop[1], crop[2], crop[3]};
+  if (crop.size() == 4) {
+    // 0,0,0,0 is the options' "no crop": given, it is a rectangle of no pixels.
+    if (crop[2] <= 0 || crop[3] <= 0) {
+      throw CLI::ValidationError("--crop", "x,y,w,h needs w, h > 0 (got " +
+                                               std::to_string(crop[2]) + "x" +
+                                               std::to_string(crop[3]) + ")");
+    }
+    o.crop = {crop[0], crop[1], crop[2], crop[3]};
+  }
   if (std::string m = o.Check(); !m.empty()) throw CLI::ValidationError("--crop", m);
   return o;
 }

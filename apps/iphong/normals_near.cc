@@ -7,6 +7,7 @@
 #include <cstdlib>
 
 #include "core/timing.h"
+#include "geometry/height_map.h"
 #include "io/files.h"
 #include "io/image_io.h"
 #include "io/surface.h"
@@ -207,10 +208,10 @@ near::EffectiveDistanceOptions EffectiveDistanceOptionsFor(const NormalsCommandO
   } else if (o.light_distance != "auto") {
     char* end = nullptr;
     e.distance_px = std::strtod(o.light_distance.c_str(), &end);
-    if (end == o.light_distance.c_str() || *end != '\0' || !(e.distance_px > 0)) {
+    if (end == o.light_distance.c_str() || *end != '\0' || !geometry::ScaleInRange(e.distance_px)) {
       throw std::invalid_argument(
-          "--light-distance: expected auto, inf or a distance in pixels "
-          "> 0, got '" +
+          "--light-distance: expected auto, inf or a distance in pixels between 1e-12 and 1e12, "
+          "got '" +
           o.light_distance + "'");
     }
   }

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/timing.h"
+#include "geometry/height_map.h"
 #include "near/distance_choice.h"
 #include "near/internal.h"
 #include "reflectance/material.h"
@@ -24,7 +25,11 @@ using namespace internal;
 
 std::string EffectiveDistanceOptions::Validate() const {
   if (auto m = normals.Validate(); !m.empty()) return m;
-  if (!(distance_px >= 0) || std::isnan(distance_px)) return "distance must be >= 0 (or inf)";
+  // A finite D beyond 1e12 px puts the lights' irradiance (1/D²) below double's sums: what is
+  // meant is inf, which says so.
+  if (!(distance_px == 0 || std::isinf(distance_px) || geometry::ScaleInRange(distance_px))) {
+    return "distance must be 0 (choose), inf (distant) or between 1e-12 and 1e12 pixels";
+  }
   if (max_passes < 1 || max_passes > 100) return "passes must be in 1..100";
   if (!(tolerance_deg > 0) || !std::isfinite(tolerance_deg)) return "tolerance must be > 0";
   if (distance_rounds < 0 || distance_rounds > 10) return "distance rounds must be in 0..10";

@@ -337,6 +337,13 @@ def small_height(tmp_path_factory):
     # Infinite heights and an empty mesh behind exit 0, before the range.
     (["integrate", "ds/normals.exr", "-o", "out", "--pixel-size", "1e308"], 2,
      r"--pixel-size: must be a number between 1e-12 and 1e12 \(got 1e308\)"),
+    # The options' own "no crop": given, it ran on the whole image.
+    (["normals", "ds", "-o", "out", "--crop", "0,0,0,0"], 2,
+     r"--crop: x,y,w,h needs w, h > 0 \(got 0x0\)"),
+    # It reached the lights' check: "light diffuse intensity must be between 0 and 1e30".
+    (["normals", "ds", "-o", "out", "--light-distance", "1e300"], 1,
+     r"--light-distance: expected auto, inf or a distance in pixels between 1e-12 and 1e12, "
+     r"got '1e300'"),
     # Heights of 0 everywhere behind exit 0: the solvers' squares overflowed.
     (["integrate", "ds/normals.exr", "-o", "out", "--depth-prior", "small.exr", "--prior-weight",
       "1e300"], 2, r"--prior-weight: must be a number between 1e-12 and 1e12 \(got 1e300\)"),

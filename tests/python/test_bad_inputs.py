@@ -235,3 +235,16 @@ def test_angular_error_counts_estimates_that_are_not_finite():
     with pytest.raises(ValueError, match=r"holds no finite normal where the ground truth has one "
                                          r"\(NaN or infinite at all 6 such pixels"):
         iphong.angular_error(np.full_like(truth, np.inf), truth)
+
+
+def test_a_light_distance_beyond_1e12_pixels_is_refused():
+    """Its irradiance 1/D² is below double's sums: it reached the lights' check ("light diffuse
+    intensity must be between 0 and 1e30"); inf is the distant lights."""
+    rng = np.random.default_rng(3)
+    lights = rng.normal(size=(6, 3))
+    lights[:, 2] = np.abs(lights[:, 2]) + 1
+    lights /= np.linalg.norm(lights, axis=1, keepdims=True)
+    images = rng.uniform(0.2, 0.8, size=(6, 8, 8, 3)).astype(np.float32)
+    with pytest.raises(ValueError, match=r"distance must be 0 \(choose\), inf \(distant\) or "
+                                         r"between 1e-12 and 1e12 pixels"):
+        iphong.estimate_normals(images, lights, light_distance=1e300, model="lambert")
