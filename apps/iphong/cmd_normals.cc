@@ -458,7 +458,7 @@ void AddNormalsCommand(CLI::App& app) {
   cmd->add_option("--distance", o->distance,
                   "Near-light captures: the object's distance from the camera along its axis, "
                   "mm, a first guess (default: from the lights' layout, else from the images)")
-      ->check(Positive());
+      ->check(Scale());
   AddCaptureOptions(cmd, o->capture);
   AddOverwriteOption(cmd, o->common);
   AddThreadsOption(cmd, o->common);

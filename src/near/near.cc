@@ -9,6 +9,7 @@
 
 #include "core/parallel.h"
 #include "core/timing.h"
+#include "geometry/height_map.h"
 #include "near/internal.h"
 #include "reflectance/material.h"
 #include "solve/assemble.h"
@@ -31,7 +32,9 @@ constexpr int kMaxWoodhamPasses = 6;
 
 std::string NearOptions::Validate() const {
   if (auto m = normals.Validate(); !m.empty()) return m;
-  if (!std::isfinite(distance) || distance < 0) return "distance must be finite and >= 0";
+  if (!(distance == 0 || geometry::ScaleInRange(distance))) {
+    return "distance must be 0 (from the lights' layout) or between 1e-12 and 1e12 mm";
+  }
   if (max_passes < 1 || max_passes > 100) return "passes must be in 1..100";
   if (woodham_passes < 0 || woodham_passes > 100) return "woodham passes must be in 0..100";
   if (!(tolerance_deg > 0) || !std::isfinite(tolerance_deg)) return "tolerance must be > 0";

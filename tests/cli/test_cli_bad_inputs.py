@@ -344,6 +344,9 @@ def small_height(tmp_path_factory):
     (["normals", "ds", "-o", "out", "--light-distance", "1e300"], 1,
      r"--light-distance: expected auto, inf or a distance in pixels between 1e-12 and 1e12, "
      r"got '1e300'"),
+    # It reached "light direction 1 is not a finite unit vector" (1e-300: "reference depth").
+    (["normals", "ds", "-o", "out", "--distance", "1e300"], 2,
+     r"--distance: must be a number between 1e-12 and 1e12 \(got 1e300\)"),
     # Heights of 0 everywhere behind exit 0: the solvers' squares overflowed.
     (["integrate", "ds/normals.exr", "-o", "out", "--depth-prior", "small.exr", "--prior-weight",
       "1e300"], 2, r"--prior-weight: must be a number between 1e-12 and 1e12 \(got 1e300\)"),
