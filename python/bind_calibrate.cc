@@ -132,7 +132,8 @@ void BindCalibrate(py::module_& m) {
           const std::vector<double> v = ToNumbers(intrinsics, 4, "intrinsics");
           camera = {v[0], v[1], v[2], v[3]};
           if (std::string e = camera.Check(); !e.empty() || !camera.perspective()) {
-            throw std::invalid_argument("intrinsics: fx and fy must be > 0, cx and cy finite");
+            throw std::invalid_argument(
+                "intrinsics: fx and fy must be between 1e-12 and 1e12, cx and cy finite");
           }
         }
         std::vector<calibrate::SphereOutline> outlines;

@@ -138,7 +138,8 @@ void RunCalibrate(const CalibrateOptions& o) {
   if (!o.intrinsics.empty()) {
     camera = {o.intrinsics[0], o.intrinsics[1], o.intrinsics[2], o.intrinsics[3]};
     if (std::string m = camera.Check(); !m.empty() || !camera.perspective()) {
-      throw CLI::ValidationError("--intrinsics", "fx and fy must be > 0, cx and cy finite");
+      throw CLI::ValidationError("--intrinsics",
+                                 "fx and fy must be between 1e-12 and 1e12, cx and cy finite");
     }
   }
   const bool known_normals = !o.normals.empty();
@@ -404,7 +405,7 @@ void AddCalibrateCommand(CLI::App& app) {
   cmd->add_option("--sphere-radius", o->sphere_radius_mm,
                   "The spheres' radius in mm: light_positions.txt in mm (else in sphere radii, "
                   "or pixels for an orthographic camera)")
-      ->check(Positive());
+      ->check(Scale());
   cmd->add_option("--spheres", o->max_spheres, "Most spheres to look for in the mask")
       ->check(CLI::Range(1, 2))
       ->capture_default_str();

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "calibrate/lights.h"
+#include "geometry/height_map.h"
 
 namespace iphong::calibrate {
 namespace {
@@ -79,9 +80,10 @@ std::string CheckCircle(const SphereOutline& circle, int width, int height) {
 
 std::string Intrinsics::Check() const {
   if (fx == 0 && fy == 0) return "";
-  if (!(fx > 0) || !(fy > 0) || !std::isfinite(fx) || !std::isfinite(fy) || !std::isfinite(cx) ||
+  // As every scale: a focal length of 1e300 px made every light the same direction.
+  if (!geometry::ScaleInRange(fx) || !geometry::ScaleInRange(fy) || !std::isfinite(cx) ||
       !std::isfinite(cy)) {
-    return "intrinsics need fx, fy > 0 and a finite principal point";
+    return "intrinsics need fx, fy between 1e-12 and 1e12 and a finite principal point";
   }
   return "";
 }

@@ -358,7 +358,12 @@ def test_an_estimate_within_its_error_of_equal_lights_that_moves_the_normals_is_
 @pytest.mark.parametrize("args, code, pattern", [
     (["--circle", "1000,1000,50"], 2,
      r"--circle: the circle \(1000\.0, 1000\.0, r 50\.0\) lies mostly outside the 96x96 images"),
-    (["--intrinsics", "0,0,48,48"], 2, r"--intrinsics: fx and fy must be > 0, cx and cy finite"),
+    (["--intrinsics", "0,0,48,48"], 2,
+     r"--intrinsics: fx and fy must be between 1e-12 and 1e12, cx and cy finite"),
+    # Every light came out the same direction, exit 0.
+    (["--intrinsics", "1e300,1e300,48,48"], 2,
+     r"--intrinsics: fx and fy must be between 1e-12 and 1e12, cx and cy finite"),
+    (["--sphere-radius", "1e300"], 2, r"--sphere-radius: must be a number between 1e-12 and 1e12"),
     (["--saturation", "0"], 2, r"--saturation: must be a number in \(0, 1\] \(got 0\)"),
 ])
 def test_bad_flags(tmp_path, args, code, pattern):
