@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <stdexcept>
 
@@ -155,6 +156,25 @@ MaterialFit FitMaterial(const solve::PhotometricData& data, const std::vector<Ve
   result.pixels = with_normal.size();
   result.fitted_pixels = s.size();
   for (unsigned char u : s.usable) result.saturated += !u;
+  // With every lit observation at or above the saturation level only the black ones are left:
+  // every model explained them with zero coefficients at a held-out error of 0 (a NaN noise
+  // ratio), and that material was written.
+  {
+    bool lit_usable = false;
+    for (std::size_t p = 0; p < s.size() && !lit_usable; ++p) {
+      for (int j = 0; j < s.lights && !lit_usable; ++j) {
+        const float* y = s.y(p, j);
+        lit_usable = s.usable[p * s.lights + j] && (y[0] > 0 || y[1] > 0 || y[2] > 0);
+      }
+    }
+    if (!lit_usable && s.size() > 0) {
+      char level[32];
+      std::snprintf(level, sizeof level, "%.3g", options.saturation);
+      throw std::invalid_argument(
+          std::string("every lit observation is at or above the saturation level ") + level +
+          ": nothing to fit (a saturation below the photos' values, or photos clipped white?)");
+    }
+  }
   result.fold.resize(k);
   for (int j = 0; j < k; ++j) result.fold[j] = j % folds;
 

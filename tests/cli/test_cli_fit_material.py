@@ -179,6 +179,13 @@ def test_bad_inputs_one_line_nothing_written(tmp_path):
     assert code == 0, err
     assert_refused(tmp_path, ["fit-material", tmp_path / "three", "--normals", tmp_path / "three",
                               "-o", out], 1, r"3 light\(s\): the phong model needs at least 4")
+    # Every lit observation saturated (8-bit codes within 0-1, so the level applies), no black
+    # one left: refused before (no usable observation), and by the same line now.
+    render_dataset(tmp_path / "png", "--format", "png")
+    assert_refused(tmp_path, ["fit-material", tmp_path / "png", "--normals", tmp_path / "png",
+                              "--saturation", "1e-9", "-o", out], 1,
+                   r"every lit observation is at or above the saturation level 1e-09: nothing "
+                   r"to fit", tmp_path / "png")
     # Neither or both geometries.
     assert_refused(tmp_path, ["fit-material", tmp_path / "d", "-o", out], 2, r"--normals N or --sphere")
     # A scene's material file without kd says how to give one.
@@ -203,3 +210,16 @@ def test_diligent_ball_specular_beats_lambert_on_held_out_lights(tmp_path):
     assert scores["blinn-phong"] < 0.5 * scores["lambert"], scores
     chosen = next(m for m in report["models"] if m["model"] == report["chosen"])
     assert chosen["heldout_rmse_over_noise"] < 1.3  # predicted to within 30 % of the noise
+
+
+@pytest.mark.skipif(not (DATA / "diligent-crop8" / "ball").is_dir(),
+                    reason=f"DiLiGenT ball crop not found under {DATA} (see ../shared/data/README.md)")
+def test_photos_saturated_wherever_lit_are_refused(tmp_path):
+    """Every lit observation at or above --saturation, the shadows' black ones left: every model
+    explained those with zero coefficients at a held-out error of 0 (a NaN noise ratio), and that
+    material was written with exit 0."""
+    ball = DATA / "diligent-crop8" / "ball"
+    assert_refused(tmp_path, ["fit-material", ball, "--normals", ball, "--saturation", "1e-9",
+                              "-o", tmp_path / "out"], 1,
+                   r"every lit observation is at or above the saturation level 1e-09: nothing "
+                   r"to fit", str(ball), ignore_warnings=True)
