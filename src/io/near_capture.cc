@@ -92,8 +92,8 @@ NearLightFiles FindNearLights(const std::string& directory, std::size_t count,
   }
   if (Exists(dir / "light_axes.txt")) {
     n.axes_path = (dir / "light_axes.txt").string();
-    n.axes = ParseTriples(ReadTextFile(n.axes_path), n.axes_path, count, "filenames.txt",
-                          &n.axis_lines);
+    n.axes =
+        ParseTriples(ReadTextFile(n.axes_path), n.axes_path, count, "filenames.txt", &n.axis_lines);
     for (std::size_t j = 0; j < n.axes.size(); ++j) {
       n.axes[j] = Unit(n.axes[j], n.axes_path, n.axis_lines[j], "LED axis");
     }
