@@ -10,10 +10,12 @@
 #include "geometry/height_map.h"
 #include "io/files.h"
 #include "io/image_io.h"
+#include "io/near_capture.h"
 #include "io/surface.h"
 #include "iphong/console.h"
 #include "iphong/normals_command.h"
 #include "near/near.h"
+#include "reflectance/lighting.h"
 
 namespace iphong::cli {
 namespace {
@@ -99,12 +101,12 @@ void CheckLightsOutsideSurface(const io::NearLightFiles& files, const near::Near
   }
 }
 
-// An LED whose axis faces away from every point of the surface (a·(X − S) ≤ 0 at each) gives it
-// no light under the model, so its photo must be dark. Lit, it says the axis is the wrong way
-// round (light_axes.txt gives the way each LED points, toward what it lights) or another light's:
-// the fit would explain a lit photo by a light that sends nothing. "Lit": its mean inside the mask
-// at least a quarter of the median photo's, as no shadow darkens a whole photo that much less
-// than its own light's fall-off allows.
+// An LED that sends no light to any point of the surface (the model's LED factor 0 at each: its
+// axis faces away) must have a dark photo. Lit, the axis is the wrong way round (light_axes.txt
+// gives the way each LED points, toward what it lights) or another light's: the fit would explain
+// a lit photo by a light that sends nothing. "Lit": its mean inside the mask at least a quarter of
+// the median photo's, as no shadow darkens a whole photo that much less than its own light's
+// fall-off allows.
 void CheckLedAxesFaceTheObject(const io::NearLightFiles& files, const near::NearResult& r,
                                const solve::PhotometricData& observations) {
   if (files.axes.empty() || files.anisotropy.empty()) return;
@@ -120,26 +122,27 @@ void CheckLedAxesFaceTheObject(const io::NearLightFiles& files, const near::Near
   std::nth_element(sorted.begin(), sorted.begin() + k / 2, sorted.end());
   const double median = sorted[k / 2];
   if (!(median > 0)) return;
+  const std::vector<reflectance::Light> lights =
+      io::NearPointLights(files, std::vector<Vec3d>(files.positions_mm.size(), Vec3d::Ones()));
   for (int j = 0; j < k; ++j) {
     if (!(files.anisotropy[j] > 0) || mean[j] < 0.25 * median) continue;
-    const Vec3d& s = files.positions_mm[j];
-    const Vec3d& axis = files.axes[j];
-    double best = -INFINITY;  // the largest cosine between the axis and a direction to the surface
-    for (std::size_t p = 0; p < r.depth.pixels.size(); ++p) {
+    bool lights_some = false, surface = false;
+    for (std::size_t p = 0; p < r.depth.pixels.size() && !lights_some; ++p) {
       if (!(r.depth.pixels[p] > 0)) continue;
+      surface = true;
       const float* x = r.points.pixels.data() + 3 * p;
-      const Vec3d to = Vec3d(x[0], x[1], x[2]) - s;
-      if (to.norm() > 0) best = std::max(best, axis.dot(to.normalized()));
+      Vec3d direction, diffuse, specular;
+      lights_some = reflectance::LightAt(lights[j], Vec3d(x[0], x[1], x[2]), &direction, &diffuse,
+                                         &specular) &&
+                    diffuse.maxCoeff() > 0;
     }
-    if (best > 0 || best == -INFINITY) continue;
-    char text[400];
-    std::snprintf(text, sizeof text,
-                  "LED %d's axis points away from the object (%.0f deg or more from every "
-                  "direction toward its surface), so it would light nothing, yet its photo is "
-                  "lit: an axis gives the way the LED points, toward the object (negated?)",
-                  j + 1, std::acos(std::clamp(best, -1.0, 1.0)) * 180 / M_PI);
-    throw std::runtime_error(files.axes_path + ":" + std::to_string(files.axis_lines[j]) + ": " +
-                             text);
+    if (!surface || lights_some) continue;
+    throw std::runtime_error(
+        files.axes_path + ":" + std::to_string(files.axis_lines[j]) + ": LED " +
+        std::to_string(j + 1) +
+        "'s axis faces away from every point of the object's surface, so it would light "
+        "nothing, yet its photo is lit: an axis gives the way the LED points, toward the object "
+        "(negated?)");
   }
 }
 

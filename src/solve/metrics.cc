@@ -24,11 +24,11 @@ AngularErrorMetrics CompareNormals(const ImageF& estimate, const ImageF& ground_
     const float* g = ground_truth.pixels.data() + p * ground_truth.channels;
     const Vec3d a(e[0], e[1], e[2]), b(g[0], g[1], g[2]);
     if (!(b.norm() > 0.5)) continue;  // no ground truth here
-    if (!a.allFinite() && m.not_finite++ == 0) m.first_not_finite = p;
-    const double na = a.norm();
+    const bool finite = a.allFinite();
+    if (!finite && m.not_finite++ == 0) m.first_not_finite = p;
     // atan2 of |a×b| and a·b is accurate for tiny angles, where acos loses digits.
     const double angle =
-        na > 0 && a.allFinite() ? std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI : 180.0;
+        finite && a.norm() > 0 ? std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI : 180.0;
     errors.push_back(angle);
     m.error_deg.pixels[p] = static_cast<float>(angle);
   }
