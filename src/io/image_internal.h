@@ -14,6 +14,24 @@ namespace iphong::io::internal {
 // std::runtime_error naming the file.
 std::unique_ptr<OIIO::ImageInput> OpenImageChecked(const std::string& path, ImageHeader* header);
 
+// Where a file's pixel data lie in the picture it shows. OpenEXR keeps a data window within a
+// display window; viewers show the display window, black where there are no data, and so does
+// iphong: the images of a capture are registered by their display windows (a renderer's EXRs
+// cropped to what each light lit are still one picture size). Other formats are their data: a
+// TIFF's XPosition (a scanner's offset on its bed) is not a black border viewers show.
+struct DataPlacement {
+  int display_width = 0, display_height = 0;
+  int x = 0, y = 0;   // the data window's first pixel in the display window (negative: overscan)
+  bool whole = true;  // the data window is the display window: nothing to place
+};
+DataPlacement PlacementOf(OIIO::ImageInput& in);
+
+// Copies `rows` rows of the data window from data row `data_y0` on (spec.width × rows pixels of
+// `channels` floats at `data`) into the display rows they cover of `band`, whose first row is
+// display row `band_y0`; what falls outside the display window is dropped.
+void PlaceRows(const float* data, int data_width, int data_y0, int rows, int channels,
+               const DataPlacement& place, int band_y0, ImageF& band);
+
 // The header as displayed under `orientation` (kFileOrientation: the file's own), its
 // orientation field still the file's statement. Throws std::logic_error outside 0–8.
 ImageHeader Oriented(const ImageHeader& file_header, int orientation);

@@ -57,7 +57,9 @@ std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHead
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1) {
     Fail(path, "empty or not a 2D image");
   }
+  const internal::DataPlacement place = internal::PlacementOf(*in);
   const double pixels = static_cast<double>(spec.width) * spec.height;
+  const double shown = static_cast<double>(place.display_width) * place.display_height;
   const int bits =
       spec.get_int_attribute("oiio:BitsPerSample", static_cast<int>(spec.format.size()) * 8);
   const double declared = pixels * spec.nchannels * std::max(bits, 1) / 8.0;
@@ -70,12 +72,17 @@ std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHead
                    std::to_string(spec.nchannels) +
                    ", more than iphong handles (2^31 pixels, 64 channels)");
   }
+  if (shown > kMaxPixels) {
+    Fail(path, "declares a display window of " +
+                   SizeText(place.display_width, place.display_height) +
+                   " pixels, more than iphong handles (2^31)");
+  }
   int orientation = spec.get_int_attribute("Orientation", 1);
   if (orientation < 1 || orientation > 8) orientation = 1;  // what viewers do with a bad tag
   const std::string format = in->format_name();
   *header = {
-      spec.width,
-      spec.height,
+      place.display_width,
+      place.display_height,
       spec.nchannels,
       orientation,
       spec.format.is_floating_point(),
@@ -88,6 +95,43 @@ std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHead
 }  // namespace
 
 namespace internal {
+
+DataPlacement PlacementOf(OIIO::ImageInput& in) {
+  const OIIO::ImageSpec& spec = in.spec();
+  DataPlacement p;
+  p.display_width = spec.width;
+  p.display_height = spec.height;
+  if (std::string(in.format_name()) != "openexr" || spec.full_width <= 0 || spec.full_height <= 0) {
+    return p;
+  }
+  p.display_width = spec.full_width;
+  p.display_height = spec.full_height;
+  // As wide integers: a forged header's origins may lie anywhere in int's range.
+  const long long x = static_cast<long long>(spec.x) - spec.full_x;
+  const long long y = static_cast<long long>(spec.y) - spec.full_y;
+  const auto clamp = [](long long v) {
+    return static_cast<int>(std::clamp<long long>(v, -(1LL << 30), 1LL << 30));
+  };
+  p.x = clamp(x), p.y = clamp(y);
+  p.whole =
+      p.x == 0 && p.y == 0 && spec.width == p.display_width && spec.height == p.display_height;
+  return p;
+}
+
+void PlaceRows(const float* data, int data_width, int data_y0, int rows, int channels,
+               const DataPlacement& place, int band_y0, ImageF& band) {
+  const long long x0 = std::max<long long>(0, place.x);
+  const long long x1 =
+      std::min<long long>(band.width, static_cast<long long>(place.x) + data_width);
+  if (x1 <= x0) return;
+  for (int r = 0; r < rows; ++r) {
+    const long long y = static_cast<long long>(place.y) + data_y0 + r - band_y0;
+    if (y < 0 || y >= band.height) continue;
+    const float* from = data + (std::size_t(r) * data_width + (x0 - place.x)) * channels;
+    std::copy(from, from + (x1 - x0) * channels,
+              band.at(static_cast<int>(x0), static_cast<int>(y)));
+  }
+}
 
 std::unique_ptr<OIIO::ImageInput> OpenImageChecked(const std::string& path, ImageHeader* header) {
   return OpenChecked(path, header);
@@ -233,15 +277,25 @@ ImageF ReadImage(const std::string& path, const MemoryLimit& memory,
   const ImageHeader h = internal::Oriented(file, orientation);
   if (check) check(h);
   const int turn = orientation == kFileOrientation ? file.orientation : orientation;
-  // The float image, and the decoder's own buffer (or the turned copy) of at most the same size.
-  RequireMemory(memory, 2.0 * h.width * h.height * h.channels * sizeof(float),
-                path + ": decoding this " + SizeText(h.width, h.height) + " image");
   const OIIO::ImageSpec& spec = in->spec();
-  ImageF image(spec.width, spec.height, h.channels);
-  if (!in->read_image(0, 0, 0, h.channels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+  const internal::DataPlacement place = internal::PlacementOf(*in);
+  // The float image, and the decoder's own buffer (or the turned copy) of at most the same size;
+  // a data window other than the display window is decoded first, then placed.
+  const double placed = place.whole ? 0.0 : static_cast<double>(spec.width) * spec.height;
+  RequireMemory(memory, (2.0 * h.width * h.height + placed) * h.channels * sizeof(float),
+                path + ": decoding this " + SizeText(h.width, h.height) + " image");
+  ImageF image(place.display_width, place.display_height, h.channels);
+  ImageF data;
+  if (!place.whole) data = ImageF(spec.width, spec.height, h.channels);
+  if (!in->read_image(0, 0, 0, h.channels, OIIO::TypeDesc::FLOAT,
+                      (place.whole ? image : data).pixels.data())) {
     Fail(path, "cannot decode: " + in->geterror());
   }
   in->close();
+  if (!place.whole) {
+    internal::PlaceRows(data.pixels.data(), data.width, 0, data.height, h.channels, place, 0,
+                        image);
+  }
   return turn == 1 ? image : internal::Reorient(image, turn);
 }
 

@@ -22,17 +22,48 @@ ImageRowReader::ImageRowReader(const std::string& path, int orientation) : path_
   in_ = internal::OpenImageChecked(path, &file);
   header_ = internal::Oriented(file, orientation);
   orientation_ = orientation == kFileOrientation ? file.orientation : orientation;
-  stored_width_ = in_->spec().width;
-  stored_height_ = in_->spec().height;
+  const internal::DataPlacement place = internal::PlacementOf(*in_);
+  stored_width_ = place.display_width;
+  stored_height_ = place.display_height;
+  data_x_ = place.x, data_y_ = place.y, data_whole_ = place.whole;
 }
 
 ImageF ImageRowReader::ReadStoredRows(int y0, int y1, int shown_y0, int shown_y1) {
-  ImageF band(stored_width_, y1 - y0, header_.channels);
-  if (!in_->read_scanlines(0, 0, y0, y1, 0, 0, header_.channels, OIIO::TypeDesc::FLOAT,
-                           band.pixels.data())) {
+  const OIIO::ImageSpec& spec = in_->spec();
+  const int c = header_.channels;
+  internal::DataPlacement place;
+  place.display_width = stored_width_, place.display_height = stored_height_;
+  place.x = data_x_, place.y = data_y_, place.whole = data_whole_;
+  ImageF band(stored_width_, y1 - y0, c);
+  // The data window's rows among display rows [y0, y1); the rest of the band stays black.
+  const long long r0 = std::max<long long>(0, static_cast<long long>(y0) - place.y);
+  const long long r1 = std::min<long long>(spec.height, static_cast<long long>(y1) - place.y);
+  if (r1 <= r0) return band;
+  const auto fail = [&] {
     throw std::runtime_error(path_ + ": cannot decode rows " + std::to_string(shown_y0) + ".." +
                              std::to_string(shown_y1 - 1) + ": " + OneLine(in_->geterror()));
+  };
+  // A tiled file is read by whole rows of tiles: OpenImageIO 2.4's read_scanlines divides by
+  // zero on one (SIGFPE).
+  int first = static_cast<int>(r0), last = static_cast<int>(r1);
+  if (spec.tile_width > 0 && spec.tile_height > 0) {
+    first = first / spec.tile_height * spec.tile_height;
+    last = static_cast<int>(std::min<long long>(
+        spec.height, (r1 + spec.tile_height - 1) / spec.tile_height * spec.tile_height));
   }
+  const bool direct = place.whole && first == r0 && last == r1;
+  std::vector<float> rows;
+  if (!direct) rows.resize(std::size_t(spec.width) * (last - first) * c);
+  float* to = direct ? band.pixels.data() : rows.data();
+  const bool ok = spec.tile_width > 0 && spec.tile_height > 0
+                      ? in_->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + first,
+                                        spec.y + last, spec.z, spec.z + std::max(1, spec.depth), 0,
+                                        c, OIIO::TypeDesc::FLOAT, to)
+                      : in_->read_scanlines(0, 0, spec.y + first, spec.y + last, 0, 0, c,
+                                            OIIO::TypeDesc::FLOAT, to);
+  if (!ok) fail();
+  if (!direct)
+    internal::PlaceRows(rows.data(), spec.width, first, last - first, c, place, y0, band);
   return band;
 }
 

@@ -30,8 +30,10 @@ class ImageRowReader {
   ImageF ReadStoredRows(int y0, int y1, int shown_y0, int shown_y1);  // stored rows [y0, y1)
   std::string path_;
   ImageHeader header_;
-  int orientation_ = 1;  // the one applied
-  int stored_width_ = 0, stored_height_ = 0;
+  int orientation_ = 1;                       // the one applied
+  int stored_width_ = 0, stored_height_ = 0;  // the display window, before the orientation
+  int data_x_ = 0, data_y_ = 0;  // the data window's origin in it (internal::DataPlacement)
+  bool data_whole_ = true;
   std::unique_ptr<OIIO::ImageInput> in_;
 };
 

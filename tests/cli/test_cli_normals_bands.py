@@ -70,6 +70,33 @@ def test_bands_equal_the_whole(captures, tmp_path, layout, rows, flags):
         assert a["ks"] == b["ks"] and a["shininess"] == b["shininess"]
 
 
+@pytest.mark.skipif(OIIOTOOL is None, reason="oiiotool (openimageio-tools) not installed")
+@pytest.mark.parametrize("how", [["--trim"], ["--tile", "16", "16"]])
+def test_exrs_as_other_tools_store_them(captures, tmp_path, how):
+    """EXRs cropped to the pixels each light lit (a data window inside the display window, as
+    compositors write them) and tiled EXRs: the normals of the capture as rendered, whole and in
+    bands. Before, trimmed photos were read at their data window's size (the mask "is 96x96, the
+    images are 82x82"), their bands could not be decoded, and bands of tiled ones crashed."""
+    data = tmp_path / "data"
+    shutil.copytree(captures / "exr", data)
+    for image in sorted(data.glob("0*.exr")):
+        subprocess.run([OIIOTOOL, str(captures / "exr" / image.name), *how, "-o", str(image)],
+                       check=True)
+    if how == ["--trim"]:
+        stored = subprocess.run([OIIOTOOL, "--info", "-v", str(data / "001.exr")],
+                                capture_output=True, text=True, check=True).stdout
+        assert "pixel data origin: x=0, y=0" not in stored, stored  # the case this is about
+    code, _, err = run("normals", captures / "exr", "-o", tmp_path / "plain", "-q",
+                       "--ignore-material")
+    assert code == 0, err
+    for name, flags in [("whole", []), ("bands", ["--band-rows", "5"])]:
+        code, _, err = run("normals", data, "-o", tmp_path / name, "-q", "--ignore-material",
+                           *flags)
+        assert code == 0, (name, err)
+        for m in ("normals.exr", "albedo.exr"):
+            assert identical(tmp_path / "plain" / m, tmp_path / name / m), (name, m)
+
+
 def test_bands_say_the_ground_truth_is_not_compared(captures, tmp_path):
     """Bands never hold the whole ground truth: the Read line named it as if it were used."""
     code, out, err = run("normals", captures / "png", "-o", tmp_path / "bands", "--band-rows", "16")

@@ -461,6 +461,74 @@ TEST_F(OrientationTest, EveryCodeIsReadAsViewersShowIt) {
   EXPECT_EQ(DescribeOrientation(6), "turned 90° clockwise");
 }
 
+// OpenEXR keeps a data window inside a display window (a renderer's image cropped to what its
+// light lit, or overscan beyond it). Viewers show the display window, black where there are no
+// data, and so does iphong, whole and in bands, scan-line or tiled: before, the data window was
+// read as the image (a capture's mask "is 96x96, the images are 82x82"), bands of such a file
+// could not be read, and bands of any tiled file crashed inside OpenImageIO 2.4 (SIGFPE).
+TEST_F(ImageIoTest, ImagesAreTheirDisplayWindowWholeAndInBands) {
+  const int w = 10, h = 9;
+  struct Case {
+    const char* name;
+    int x, y, width, height;  // the data window in display coordinates
+    int tile;                 // 0: scan lines
+  };
+  const Case cases[] = {{"inside.exr", 3, 2, 5, 4, 0},       {"overscan.exr", -2, -3, 14, 15, 0},
+                        {"corner.exr", 6, 5, 7, 8, 0},       {"tiled.exr", 0, 0, w, h, 4},
+                        {"tiled_inside.exr", 1, 3, 7, 5, 2}, {"tiled_tif.tif", 0, 0, w, h, 16}};
+  for (const Case& k : cases) {
+    SCOPED_TRACE(k.name);
+    OIIO::ImageSpec spec(k.width, k.height, 3, OIIO::TypeDesc::FLOAT);
+    if (std::string(k.name).find(".exr") != std::string::npos) {
+      spec.x = k.x + 100, spec.y = k.y + 200;  // a display window with an origin of its own
+      spec.full_x = 100, spec.full_y = 200, spec.full_width = w, spec.full_height = h;
+    }
+    if (k.tile > 0) spec.tile_width = spec.tile_height = k.tile;
+    std::vector<float> data(std::size_t(k.width) * k.height * 3);
+    ImageF expected(w, h, 3);
+    for (int y = 0; y < k.height; ++y) {
+      for (int x = 0; x < k.width; ++x) {
+        for (int c = 0; c < 3; ++c) {
+          const float v = 1 + x + 100 * y + 10000 * c;
+          data[(std::size_t(y) * k.width + x) * 3 + c] = v;
+          const int dx = k.x + x, dy = k.y + y;
+          if (dx >= 0 && dx < w && dy >= 0 && dy < h) expected.at(dx, dy)[c] = v;
+        }
+      }
+    }
+    const std::string path = Path(k.name);
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out && out->open(path, spec) &&
+                out->write_image(OIIO::TypeDesc::FLOAT, data.data()) && out->close());
+    const OIIO::ImageSpec stored = OIIO::ImageInput::open(path)->spec();
+    if (std::string(k.name).find(".exr") != std::string::npos) {
+      ASSERT_EQ(stored.x, spec.x);  // the file keeps what this case is about
+      ASSERT_EQ(stored.full_width, w);
+      ASSERT_EQ(stored.tile_width, k.tile);
+    }
+    const ImageHeader header = ReadImageHeader(path);
+    EXPECT_EQ(header.width, w);
+    EXPECT_EQ(header.height, h);
+    const ImageF read = ReadImage(path);
+    ASSERT_EQ(read.width, w);
+    ASSERT_EQ(read.height, h);
+    EXPECT_EQ(read.pixels, expected.pixels);
+    for (int band = 1; band <= h; band += 2) {
+      ImageRowReader reader(path);
+      ASSERT_EQ(reader.header().width, w);
+      for (int y0 = 0; y0 < h; y0 += band) {
+        const int y1 = std::min(h, y0 + band);
+        const ImageF rows = reader.ReadRows(y0, y1);
+        ASSERT_EQ(rows.width, w);
+        ASSERT_EQ(rows.height, y1 - y0);
+        const std::vector<float> want(expected.pixels.begin() + std::size_t(y0) * w * 3,
+                                      expected.pixels.begin() + std::size_t(y1) * w * 3);
+        EXPECT_EQ(rows.pixels, want) << "rows " << y0 << ".." << y1;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace iphong::io
 
