@@ -528,6 +528,7 @@ light_distance: "auto" (chosen by held-out prediction, distant lights among the 
         out["fraction_below_20_deg"] = m.below_20_deg;
         out["evaluated_pixels"] = m.pixels;
         out["not_finite_pixels"] = m.not_finite;
+        out["missing_pixels"] = m.missing;
         out["error_deg"] = ToArray(m.error_deg);
         if (m.not_finite > 0) {  // as `iphong eval` says it
           py::module_::import("warnings")
@@ -540,8 +541,8 @@ light_distance: "auto" (chosen by held-out prediction, distant lights among the 
       py::arg("estimate"), py::arg("ground_truth"), py::arg("mask") = py::none(),
       "Angular error statistics (degrees) and the per-pixel error map, over the mask where the "
       "ground truth is non-zero. An estimate that is not finite (NaN or infinite) is a missing "
-      "normal, 180 degrees as a zero is: counted in not_finite_pixels, with a warning; ValueError "
-      "when no evaluated pixel has a finite estimate.");
+      "normal, 180 degrees as a zero is: counted in not_finite_pixels, with a warning; "
+      "missing_pixels counts both. ValueError when no evaluated pixel has an estimate.");
 }
 
 }  // namespace iphong::python

@@ -33,7 +33,8 @@ nlohmann::json AngularErrorJson(const solve::AngularErrorMetrics& m) {
           {"median_angular_error_deg", m.median_deg},
           {"fraction_below_5_deg", m.below_5_deg},
           {"fraction_below_10_deg", m.below_10_deg},
-          {"fraction_below_20_deg", m.below_20_deg}};
+          {"fraction_below_20_deg", m.below_20_deg},
+          {"missing_pixels", m.missing}};
 }
 
 nlohmann::json FrameCheckJson(const integrate::FrameCheckResult& r) {

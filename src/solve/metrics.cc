@@ -27,8 +27,9 @@ AngularErrorMetrics CompareNormals(const ImageF& estimate, const ImageF& ground_
     const bool finite = a.allFinite();
     if (!finite && m.not_finite++ == 0) m.first_not_finite = p;
     // atan2 of |a×b| and a·b is accurate for tiny angles, where acos loses digits.
-    const double angle =
-        finite && a.norm() > 0 ? std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI : 180.0;
+    const bool some = finite && a.norm() > 0;
+    m.missing += !some;
+    const double angle = some ? std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI : 180.0;
     errors.push_back(angle);
     m.error_deg.pixels[p] = static_cast<float>(angle);
   }
@@ -39,6 +40,11 @@ AngularErrorMetrics CompareNormals(const ImageF& estimate, const ImageF& ground_
         std::to_string(errors.size()) + " such pixels; the first at column " +
         std::to_string(m.first_not_finite % estimate.width) + ", row " +
         std::to_string(m.first_not_finite / estimate.width) + ")");
+  }
+  if (m.missing == errors.size()) {
+    throw std::invalid_argument("holds no normal where the ground truth has one (0" +
+                                std::string(m.not_finite > 0 ? ", NaN or infinite" : "") +
+                                " at all " + std::to_string(errors.size()) + " such pixels)");
   }
   m.pixels = errors.size();
   double sum = 0;

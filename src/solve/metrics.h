@@ -21,12 +21,16 @@ struct AngularErrorMetrics {
   // (row-major pixel index) when there are any.
   std::size_t not_finite = 0;
   std::size_t first_not_finite = 0;
+  // Evaluated pixels with no normal in the estimate, scored 180°: a zero vector (how iphong and
+  // DiLiGenT's maps mark "none") or not finite (counted in not_finite too).
+  std::size_t missing = 0;
   ImageF error_deg;  // 1 channel, 0 outside the evaluated pixels
 };
 
 // Over the pixels inside `mask` where the ground truth is a non-zero vector. Both maps are
 // 3-channel xyz. Throws std::invalid_argument on size mismatch, an empty evaluation set or an
-// estimate with no finite normal on it.
+// estimate with no normal on it (0, NaN or infinite wherever the ground truth has one: a mean of
+// 180° is no method's, but a wrong file or a blank map).
 AngularErrorMetrics CompareNormals(const ImageF& estimate, const ImageF& ground_truth,
                                    const Mask& mask);
 

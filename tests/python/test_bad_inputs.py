@@ -235,6 +235,14 @@ def test_angular_error_counts_estimates_that_are_not_finite():
     with pytest.raises(ValueError, match=r"holds no finite normal where the ground truth has one "
                                          r"\(NaN or infinite at all 6 such pixels"):
         iphong.angular_error(np.full_like(truth, np.inf), truth)
+    assert m["missing_pixels"] == 1
+    estimate[1, 2] = 0  # iphong's and DiLiGenT's "no normal": missing, not warned of
+    with pytest.warns(UserWarning, match=r"1 of 6 pixels"):  # the NaN still is
+        m = iphong.angular_error(estimate, truth)
+    assert m["missing_pixels"] == 2 and m["not_finite_pixels"] == 1
+    with pytest.raises(ValueError, match=r"holds no normal where the ground truth has one "
+                                         r"\(0 at all 6 such pixels\)"):
+        iphong.angular_error(np.zeros_like(truth), truth)
 
 
 def test_a_light_distance_beyond_1e12_pixels_is_refused():

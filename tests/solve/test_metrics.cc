@@ -45,6 +45,7 @@ TEST(Metrics, NonFiniteEstimatesAreMissingNormalsCounted) {
   EXPECT_EQ(m.first_not_finite, 2u);
   EXPECT_NEAR(m.mean_deg, (0 + 180 + 180) / 3.0, 1e-9);
   EXPECT_EQ(m.error_deg.pixels[3], 180.0f);
+  EXPECT_EQ(m.missing, 2u);
   ImageF nan(4, 1, 3);
   for (float& v : nan.pixels) v = std::numeric_limits<float>::quiet_NaN();
   try {
@@ -54,6 +55,35 @@ TEST(Metrics, NonFiniteEstimatesAreMissingNormalsCounted) {
     EXPECT_STREQ(e.what(),
                  "holds no finite normal where the ground truth has one (NaN or infinite at all 3 "
                  "such pixels; the first at column 0, row 0)");
+  }
+}
+
+// A zero estimate is a missing normal (180°), counted; an estimate that is 0 wherever the ground
+// truth has a normal (a blank map, the wrong file) is refused, not scored 180° with exit 0.
+TEST(Metrics, AnEstimateWithNoNormalIsRefused) {
+  ImageF gt(3, 1, 3), est(3, 1, 3);
+  for (int i = 0; i < 3; ++i) gt.pixels[3 * i + 2] = 1;
+  est.pixels[2] = 1;
+  const AngularErrorMetrics m = CompareNormals(est, gt, Mask(3, 1, true));
+  EXPECT_EQ(m.missing, 2u);
+  EXPECT_EQ(m.not_finite, 0u);
+  EXPECT_NEAR(m.mean_deg, 120.0, 1e-9);
+  est.pixels[2] = 0;
+  try {
+    CompareNormals(est, gt, Mask(3, 1, true));
+    FAIL() << "an estimate of 0 everywhere was scored";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(),
+                 "holds no normal where the ground truth has one (0 at all 3 such pixels)");
+  }
+  est.pixels[0] = std::numeric_limits<float>::quiet_NaN();
+  try {
+    CompareNormals(est, gt, Mask(3, 1, true));
+    FAIL() << "an estimate of 0 and NaN was scored";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(),
+                 "holds no normal where the ground truth has one (0, NaN or infinite at all 3 such "
+                 "pixels)");
   }
 }
 
