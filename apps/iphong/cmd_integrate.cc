@@ -128,8 +128,13 @@ void RunIntegrate(IntegrateCommandOptions& o) {
     options.progress = nullptr;
     progress.reset();
   } catch (const std::invalid_argument& e) {
-    const std::string source = o.mask.empty() ? o.normals : o.normals + " with mask " + o.mask;
-    throw std::runtime_error(source + ": " + e.what());
+    // A value of the prior is the prior file's fault; the rest the normal map's (and mask's).
+    const std::string what = e.what();
+    const std::string source = what.rfind("the depth prior", 0) == 0 && !o.depth_prior.empty()
+                                   ? o.depth_prior
+                               : o.mask.empty() ? o.normals
+                                                : o.normals + " with mask " + o.mask;
+    throw std::runtime_error(source + ": " + what);
   }
   io::SurfaceFileOptions files;
   files.obj = o.obj;

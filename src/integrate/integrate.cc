@@ -3,6 +3,7 @@
 #include "geometry/height_map.h"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -253,6 +254,17 @@ IntegrateResult IntegrateNormals(const ImageF& normals_cam, const Mask& mask,
                                         ")");
           }
           value = options.perspective ? std::log(d) : d / options.pixel_size;
+          // Beyond 1e12 (pixels, or depth units) a float height keeps no relief: 1e30 gave a
+          // surface flat at the prior's value.
+          if (!(std::abs(options.perspective ? d : value) <= 1e12)) {
+            char text[48];
+            std::snprintf(text, sizeof text, "%g", d);
+            throw std::invalid_argument(
+                std::string("the depth prior holds ") + text + " at pixel (col " +
+                std::to_string(p % w) + ", row " + std::to_string(p / w) + "): beyond 1e12 " +
+                (options.perspective ? "" : "pixels ") +
+                "no height map keeps its relief (NaN marks an unknown pixel)");
+          }
         }
       }
       prior.push_back(value);

@@ -69,8 +69,9 @@ struct IntegrateOptions {
   double pixel_size = 1.0;   // orthographic: scene units per pixel
   bool perspective = false;  // integrate log depth with `intrinsics`
   Intrinsics intrinsics;
-  // Optional prior (1 channel; NaN = none at that pixel): heights (orthographic) or depths
-  // (perspective), pulled on with `prior_weight` per pixel against the unit edge weights.
+  // Optional prior (1 channel; NaN or infinite = none at that pixel): heights (orthographic,
+  // within ±1e12 pixels) or depths (perspective, 0 < depth ≤ 1e12), pulled on with
+  // `prior_weight` per pixel against the unit edge weights.
   ImageF depth_prior;
   double prior_weight = 1e-2;
   // Perspective without prior: the masked geometric mean depth.

@@ -602,3 +602,17 @@ def test_bare_iphong_prints_the_help():
     code, stdout, stderr = run()
     assert code == 0 and stderr == ""
     assert stdout.startswith("iphong: ") and "Usage: iphong" in stdout and "normals" in stdout
+
+
+@pytest.mark.skipif(shutil.which("oiiotool") is None, reason="oiiotool not installed")
+def test_a_depth_prior_beyond_1e12_pixels_is_refused_naming_its_file(rendered, tmp_path):
+    """A prior of 1e30 gave a surface flat at 1e30, exit 0 (its relief below float's precision
+    there); the error named the normal map, not the prior."""
+    user_copy(rendered, tmp_path / "ds")
+    subprocess.run(["oiiotool", "-pattern", "constant:color=1e30", "96x96", "1", "-o",
+                    str(tmp_path / "huge.exr")], check=True)
+    assert_refused(tmp_path, ["integrate", "ds/normals.exr", "-o", "out", "--depth-prior",
+                              "huge.exr"], 1,
+                   r"huge\.exr: the depth prior holds 1e\+30 at pixel \(col \d+, row \d+\): beyond "
+                   r"1e12 pixels no height map keeps its relief", ignore_warnings=True,
+                   cwd=tmp_path, timeout=60)

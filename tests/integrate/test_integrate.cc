@@ -506,6 +506,30 @@ TEST(Integrate, PriorWeightAtTheTopOfItsRangeIsFollowedBeyondItRefused) {
   EXPECT_THROW(IntegrateNormals(s.normals, s.mask, options), std::invalid_argument);
 }
 
+// A prior's values are heights within ±1e12 pixels: 1e30 gave a surface flat at 1e30 (the relief
+// below float's precision there), exit 0. Infinite values, like NaN, are unknown pixels.
+TEST(Integrate, PriorValuesBeyond1e12AreRefusedInfiniteOnesUnknown) {
+  const Synthetic s = MakeSynthetic(40, 40, SphereCap(40),
+                                    [](double x, double y) { return x * x + y * y < 15 * 15; });
+  IntegrateOptions options;
+  options.method = Method::kQuadratic;
+  options.depth_prior = ImageF(40, 40, 1, INFINITY);
+  *options.depth_prior.at(20, 20) = 5;
+  const IntegrateResult known = IntegrateNormals(s.normals, s.mask, options);
+  EXPECT_NEAR(*known.height.at(20, 20), 5, 0.05);
+  *options.depth_prior.at(20, 20) = 1e30f;
+  try {
+    IntegrateNormals(s.normals, s.mask, options);
+    FAIL() << "a prior of 1e30 was integrated";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(),
+                 "the depth prior holds 1e+30 at pixel (col 20, row 20): beyond 1e12 pixels no "
+                 "height map keeps its relief (NaN marks an unknown pixel)");
+  }
+  *options.depth_prior.at(20, 20) = -1e11f;  // within the range: followed
+  EXPECT_NEAR(*IntegrateNormals(s.normals, s.mask, options).height.at(20, 20), -1e11, 1e6);
+}
+
 // Seed 003: one light at 45° over a cylinder; the two closed-form normals per pixel, the true
 // branch picked, then the line integral gives the profile back.
 TEST(Integrate, Seed003CylinderLineIntegral) {
