@@ -103,15 +103,21 @@ void OutputFolder::Prepare(const std::string& target) {
   }
 
   // Inputs first: the output may not be one, lie inside one, or contain one. Adding to the
-  // output of a joined command that is itself the input (integrate DIR -o DIR) is the exception.
+  // output of a joined command that is itself the input (integrate DIR -o DIR), or one of whose
+  // files is (integrate DIR/normals.exr -o DIR), is the exception.
   for (const std::string& input : options_.inputs) {
     if (input.empty()) continue;
     const fs::path in = Resolve(input);
     const bool same = in == target_;
-    if (same && fs::exists(target_ / kManifest, error)) {
+    const bool child = in.parent_path() == target_;
+    if ((same || child) && fs::exists(target_ / kManifest, error)) {
       const Manifest existing = ReadManifest(target_);
       bool joins = false;
-      for (const std::string& other : options_.joins) joins |= existing.count(other) > 0;
+      for (const std::string& other : options_.joins) {
+        const auto it = existing.find(other);
+        joins |= it != existing.end() && (same || it->second.count(in.filename().string()) > 0);
+      }
+      if (joins && child) joined_inputs_.push_back(in.filename().string());
       if (joins) continue;
     }
     if (same || Within(target_, in) || Within(in, target_)) {
@@ -289,6 +295,10 @@ void OutputFolder::CommitInPlace(const std::map<std::string, ManifestEntry>& wri
           !fs::is_directory(fs::symlink_status(target_ / dir, error))) {
         Refuse((target_ / dir).string() + ": is in the way of " + name + " and is not a folder");
       }
+    }
+    if (std::find(joined_inputs_.begin(), joined_inputs_.end(), name) != joined_inputs_.end()) {
+      throw std::logic_error(dest.string() + ": " + Quote(options_.command) +
+                             " would replace its own input");
     }
     struct stat st {};
     if (::lstat(dest.c_str(), &st) != 0) continue;

@@ -76,6 +76,9 @@ class OutputFolder {
   int lock_fd_ = -1;  // flock on the target folder while writing in place
   std::vector<std::filesystem::path> created_parents_;
   std::vector<std::string> names_;  // files handed out, in order
+  // Inputs that are a joined command's files in the target (integrate DIR/normals.exr -o DIR):
+  // read, never replaced.
+  std::vector<std::string> joined_inputs_;
   std::map<std::string, std::map<std::string, ManifestEntry>> manifest_;  // command -> files
   std::shared_ptr<std::mutex> mutex_;  // held by Commit and by AbandonOutputFolders
   bool committed_ = false, abandoned_ = false;

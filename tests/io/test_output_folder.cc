@@ -206,6 +206,37 @@ TEST_F(OutputFolderTest, JoinedCommandsAddTheirFilesAndTheirInputMayBeTheFolder)
   EXPECT_TRUE(commands.contains("normals") && commands.contains("integrate"));
 }
 
+// `integrate DIR/normals.exr -o DIR`, as `integrate DIR -o DIR`: the joined command's file is
+// an input read beside which the files are added (it was refused as "contains the input", while
+// the help offers the normals' folder). A user's own file there stays an input it may not join,
+// and the joined file is never replaced by the run that reads it.
+TEST_F(OutputFolderTest, AJoinedCommandsFileMayBeTheInput) {
+  Produce(Path("out"), "normals", {{"normals.exr", "n"}});
+  Write(Path("out/mine.exr"), "user");
+  OutputFolderOptions join = Command("integrate");
+  join.joins = {"normals"};
+  join.inputs = {Path("out/normals.exr")};
+  {
+    OutputFolder out(Path("out"), join);
+    WriteTextFile(out.file("mesh.ply"), "m");
+    out.Commit();
+  }
+  EXPECT_EQ(Read(Path("out/normals.exr")), "n");
+  EXPECT_EQ(Read(Path("out/mesh.ply")), "m");
+  join.overwrite = true;
+  join.inputs = {Path("out/mine.exr")};
+  EXPECT_NE(ErrorOf([&] { OutputFolder(Path("out"), join); }).find("contains the input"),
+            std::string::npos);
+  join.inputs = {Path("out/normals.exr")};
+  EXPECT_NE(ErrorOf([&] {
+              OutputFolder out(Path("out"), join);
+              WriteTextFile(out.file("normals.exr"), "replaced");
+              out.Commit();
+            }).find("would replace its own input"),
+            std::string::npos);
+  EXPECT_EQ(Read(Path("out/normals.exr")), "n");
+}
+
 TEST_F(OutputFolderTest, OneWriterPerFolder) {
   Produce(Path("out"), "normals", {{"a.txt", "a"}});
   OutputFolder first(Path("out"), Command("normals", true));
