@@ -50,6 +50,11 @@ void RunRelight(const RelightCommandOptions& o) {
   const Vec3d intensity = o.intensity.size() == 1
                               ? Vec3d::Constant(o.intensity[0])
                               : Vec3d(o.intensity[0], o.intensity[1], o.intensity[2]);
+  try {  // the intensity's own range, named by its flag (the lights' check would name --light)
+    reflectance::Light::Directional(Vec3d::UnitZ(), intensity);
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--intensity", e.what());
+  }
   render::RelightInput input;
   for (std::size_t i = 0; i < o.lights.size(); i += 3) {
     try {

@@ -167,7 +167,8 @@ def test_bad_inputs(capture, tmp_path):
     # Values no float image holds: an intensity of 1e308 rendered infinity everywhere, and a NaN
     # albedo a black image, both behind exit 0.
     assert_refused(tmp_path, ["relight", n, "--light", "0,0,1", "--intensity", "1e308", "-o",
-                              tmp_path / "big.png"], 2, r"between 0 and 1e30")
+                              tmp_path / "big.png"], 2, r"--intensity: light diffuse intensity "
+                                                       r"must be between 0 and 1e30")
     nan = tmp_path / "nan"
     shutil.copytree(n, nan)
     oiio = shutil.which("oiiotool")
