@@ -64,9 +64,19 @@ void RunRender(const RenderCommandOptions& o) {
     throw std::invalid_argument(o.scene_path + ": " + e.what());
   }
   if (out.mask.count() == 0) {
-    throw std::runtime_error(o.scene_path +
-                             ": nothing is visible: every object is outside the camera's view "
-                             "(check the camera and the objects' positions and sizes)");
+    // Faces seen from behind are culled: a mesh wound clockwise as the camera sees it is in view
+    // but hidden, which the scene's positions do not explain. One pass drawing both sides tells.
+    render::RenderOptions both = file.options;
+    both.two_sided = true;
+    both.progress = nullptr;
+    const bool from_behind = render::Render(file.scene, both, false).mask.count() > 0;
+    throw std::runtime_error(
+        o.scene_path + ": nothing is visible: " +
+        (from_behind ? "every face in the camera's view is seen from behind (a mesh whose faces "
+                       "are wound clockwise as the camera sees them, or an object turned away: "
+                       "flip the mesh's faces or turn it)"
+                     : "every object is outside the camera's view (check the camera and the "
+                       "objects' positions and sizes)"));
   }
   {
     Progress write("write", o.common.progress_mode());

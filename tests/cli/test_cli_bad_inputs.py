@@ -278,7 +278,10 @@ SCENE_CASES = [
     ("heightfield_resolution_1e10.json", 1, r"resolution\[0\]: integer out of range"),
     ("shininess_1e400.json", 1, r"parse error: number overflow parsing '1e400'"),
     ("key_with_newline.json", 1, r"unknown field 'name x'"),
-    ("nothing_visible.json", 1, r"nothing is visible"),
+    ("nothing_visible.json", 1, r"nothing is visible: every object is outside the camera's view"),
+    # It said "outside the camera's view" of a mesh in the middle of it.
+    ("seen_from_behind.json", 1, r"nothing is visible: every face in the camera's view is seen "
+                                 r"from behind"),
     ("point_light_per_light.json", 1, r"light 1 is a point light without falloff"),
     ("corrupt_mesh.json", 1, r"not_a_mesh\.ply: declares 1000000000 vertex and 1000000000 face"),
     ("ks_is_a_string.json", 1, r"objects\[0\]\.material\.ks: expected 3 numbers"),
