@@ -21,6 +21,7 @@
 #include "iphong/commands.h"
 #include "iphong/console.h"
 #include "iphong/normals_command.h"
+#include "solve/depth_axis.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
 #include "solve/reading_check.h"
@@ -107,6 +108,36 @@ std::optional<integrate::FrameCheckResult> CheckLightFrame(const NormalsCommandO
     Warn(text);
   }
   return frame;
+}
+
+nlohmann::json CheckDepthAxis(const NormalsCommandOptions& o, const io::Dataset& dataset,
+                              const solve::PhotometricData& data) {
+  if (data.near()) return nullptr;
+  return ReportDepthAxis(o, dataset, data.light_directions, solve::CheckDepthAxis(data));
+}
+
+nlohmann::json ReportDepthAxis(const NormalsCommandOptions& o, const io::Dataset& dataset,
+                               const std::vector<Vec3d>& lights_cam,
+                               const solve::DepthAxisCheck& c) {
+  std::size_t behind = 0;
+  for (const Vec3d& l : lights_cam) behind += l.z() < 0;
+  if (c.pixels == 0 || 2 * behind > lights_cam.size()) return nullptr;
+  if (!c.message.empty()) {
+    const std::string& lights = dataset.files.lights_path;
+    const std::string text = (lights.empty() ? o.dataset : lights) +
+                             ": the light directions look like another frame: " + c.message +
+                             "; check the file's axes (x right, y up toward row 0, z toward the "
+                             "camera)" +
+                             (o.strict ? "" : ", or pass --strict to refuse such a file");
+    if (o.strict) throw std::runtime_error(text);
+    Warn(text);
+  }
+  nlohmann::json j = {{"pixels", c.pixels},
+                      {"facing_away", c.facing_away},
+                      {"best_axis", std::string(c.best_sign < 0 ? "-" : "") + "xyz"[c.best_axis]},
+                      {"best_facing_away", c.best_facing}};
+  if (!c.message.empty()) j["warning"] = c.message;
+  return j;
 }
 
 namespace {
@@ -197,6 +228,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   }
   const solve::PhotometricData& data = loaded.observations;  // masked pixels only
   const nlohmann::json encoding_check = CheckEncoding(o, dataset, data, options);
+  const nlohmann::json depth_axis_check = CheckDepthAxis(o, dataset, data);
 
   // One or two images: the per-pixel problem is ambiguous and the library solves it globally
   // with priors, which needs the coefficients, kd included.
@@ -229,7 +261,10 @@ void RunNormals(const NormalsCommandOptions& o) {
   // The light file's frame, from the normals it gave (CheckLightFrame). The one- and two-image
   // solve is left out: its priors make any reading integrable.
   std::optional<integrate::FrameCheckResult> frame;
-  if (ambiguity.pixels.empty() && !near_run) {
+  // A file whose depth axis is another has had its warning: no reading of the image plane
+  // undoes that, and the normals the search kept on the camera's side say nothing of one.
+  const bool depth_slip = depth_axis_check.contains("warning");
+  if (ambiguity.pixels.empty() && !near_run && !depth_slip) {
     Mask with_normal = dataset.mask;
     for (std::size_t p = 0; p < with_normal.inside.size(); ++p)
       with_normal.inside[p] = with_normal.inside[p] && result.residual.pixels[p] >= 0;
@@ -255,6 +290,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   if (estimated) metrics["estimated_intensities"] = estimated->metrics;
   if (frame) metrics["frame_check"] = FrameCheckJson(*frame);
   if (!encoding_check.is_null()) metrics["encoding_check"] = encoding_check;
+  if (!depth_axis_check.is_null()) metrics["depth_axis_check"] = depth_axis_check;
   std::optional<solve::AngularErrorMetrics> errors;
   if (!dataset.normal_gt.pixels.empty()) {
     try {

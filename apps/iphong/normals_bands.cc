@@ -110,8 +110,14 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
   source.width = width;
   source.height = height;
   source.masked_pixels = dataset.mask.count();
+  // The light file's depth axis from every band of the first pass (a spread stride of its
+  // pixels), as the in-memory run checks a spread sample of the whole capture.
+  solve::DepthAxisCounts depth_counts;
+  const std::size_t depth_stride = std::max<std::size_t>(1, (source.masked_pixels + 19999) / 20000);
   source.read = [&](int y0, int y1, bool first_pass) {
-    return capture.ReadBand(y0, y1, first_pass);
+    solve::PhotometricData band = capture.ReadBand(y0, y1, first_pass);
+    if (first_pass) depth_counts.Add(band, depth_stride);
+    return band;
   };
 
   // The writers open on the first band, when the plan says which maps there are.
@@ -135,7 +141,7 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
   };
   // The encoding check on the plan sample, as the in-memory run makes it on the whole capture's
   // spread sample (the same pixels when the capture holds fewer than the plan sample).
-  nlohmann::json encoding_check;
+  nlohmann::json encoding_check, depth_axis_check;
   band_progress.sample = [&](const solve::PhotometricData& sample) {
     if (encoding_check.is_null()) encoding_check = CheckEncoding(o, dataset, sample, options);
   };
@@ -225,7 +231,11 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
     ImageF small;
     Mask small_mask;
     blocks.Result(&small, &small_mask);
-    frame = CheckLightFrame(o, dataset, small, small_mask);  // --strict: throws, nothing committed
+    depth_axis_check = ReportDepthAxis(o, dataset, dataset.light_directions,
+                                       depth_counts.Result());  // --strict: throws
+    if (!depth_axis_check.contains("warning")) {  // as in memory: no reading undoes that
+      frame = CheckLightFrame(o, dataset, small, small_mask);  // --strict: throws
+    }
   }
   for (auto* w : {&normals, &picture, &albedo, &residual, &specular, &model})
     if (*w) (*w)->Finish();
@@ -257,6 +267,7 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
   metrics["images"] = k;
   if (frame) metrics["frame_check"] = FrameCheckJson(*frame);
   if (!encoding_check.is_null()) metrics["encoding_check"] = encoding_check;
+  if (!depth_axis_check.is_null()) metrics["depth_axis_check"] = depth_axis_check;
   if (!effective_json.is_null()) metrics["effective_distance"] = effective_json;
   metrics["bands"] = {
       {"rows", band_rows},

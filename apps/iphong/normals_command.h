@@ -14,6 +14,7 @@
 #include "iphong/commands.h"
 #include "near/effective_distance.h"
 #include "near/near.h"
+#include "solve/depth_axis.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
 
@@ -93,6 +94,18 @@ std::optional<integrate::FrameCheckResult> CheckLightFrame(const NormalsCommandO
                                                            const ImageF& normals,
                                                            const Mask& with_normal);
 nlohmann::json FrameCheckJson(const integrate::FrameCheckResult& r);
+
+// The light file's depth axis, from Woodham's unconstrained normals on a sample of `data`
+// (solve/depth_axis.h: a file whose x or y is the axis toward the camera): a warning naming the
+// axis, or with --strict an error. Before the solve, so a long run does not hide it. Nothing for
+// near lights, or a file with most lights behind the object (its own warning). Returns
+// metrics.json's "depth_axis_check", or null when not checked.
+nlohmann::json CheckDepthAxis(const NormalsCommandOptions& o, const io::Dataset& dataset,
+                              const solve::PhotometricData& data);
+// The same from counts added up elsewhere (bands: every band of the first pass); `lights` the
+// capture's directions.
+nlohmann::json ReportDepthAxis(const NormalsCommandOptions& o, const io::Dataset& dataset,
+                               const std::vector<Vec3d>& lights, const solve::DepthAxisCheck& c);
 
 // Files that state no colour space were read as linear (io::EncodingChoice::assumed): whether the
 // data agree (solve/reading_check.h), a warning when decoding them as sRGB predicts held-out
