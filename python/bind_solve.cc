@@ -10,7 +10,9 @@
 
 #include "arrays.h"
 #include "bindings.h"
+#include "integrate/frame_check.h"
 #include "io/image_io.h"
+#include "solve/depth_axis.h"
 #include "solve/few_images.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
@@ -415,11 +417,44 @@ depend on its own observations and the plan only, so any blocking gives the same
               "the one- and two-image solve of " + std::to_string(data.pixels.size()) + " pixels");
         }
         py::dict out;
+        // The light array's frame, as `iphong normals` checks a light file (both look at what
+        // the photos say): its depth axis first, from Woodham's unconstrained normals; the image
+        // plane's readings then from the normals recovered. Not for near lights, nor for lights
+        // mostly behind the object (the fix is not a reading), nor one or two images.
+        std::size_t behind = 0;
+        for (const Vec3d& l : data.light_directions) behind += l.z() < 0;
+        const bool check_frame = light_positions.is_none() && k >= 3 && 2 * behind <= k;
+        const auto warn = [](const std::string& what) {
+          py::module_::import("warnings")
+              .attr("warn")("light_directions look like another frame: " + what +
+                            "; check their axes (x right, y up toward row 0, z toward the camera)");
+        };
+        bool depth_slip = false;
+        if (check_frame) {
+          const solve::DepthAxisCheck c = solve::CheckDepthAxis(data);
+          out["depth_axis_check"] = py::dict(
+              py::arg("pixels") = c.pixels, py::arg("facing_away") = c.facing_away,
+              py::arg("best_axis") = std::string(c.best_sign < 0 ? "-" : "") + "xyz"[c.best_axis],
+              py::arg("best_facing_away") = c.best_facing);
+          depth_slip = !c.message.empty();
+          if (depth_slip) warn(c.message);
+        }
         solve::NormalResult result;
         if (!SolveNear(data, options, light_positions, camera, light_axes, light_anisotropy,
                        distance, light_distance, out, &result)) {
           py::gil_scoped_release release;
           result = solve::RecoverNormals(data, options);
+        }
+        if (check_frame && !depth_slip && result.ambiguity_deg.pixels.empty()) {
+          // The mask's pixels with a normal: its edge is the silhouette the check reads.
+          Mask solved(result.residual.width, result.residual.height, false);
+          for (const auto p : data.pixels) solved.inside[p] = result.residual.pixels[p] >= 0;
+          integrate::FrameCheckOptions frame;
+          frame.threads = threads;
+          const integrate::FrameCheckResult f =
+              integrate::CheckNormalFrame(result.normals, solved, frame);
+          out["frame_check"] = integrate::PlaneReadingName(f.better);
+          if (!f.message.empty()) warn(f.message);
         }
         out["normals"] = ToArray(result.normals);
         out["albedo"] = ToArray(result.albedo);
@@ -498,7 +533,11 @@ weigh_by_shading=False, as `iphong normals --uniform-weights`, weighs every obse
 takes nothing off).
 Returns normals (H, W, 3), albedo (H, W, 3), specular (H, W, 3: each pixel's ks; not for
 lambert), residual (H, W; -1 where no normal was found),
-the specular coefficients used or estimated, and a summary. With 1 or 2 images (material with
+the specular coefficients used or estimated, and a summary. Distant lights are checked as
+`iphong normals` checks a light file, with a UserWarning when they look like another frame:
+depth_axis_check (Woodham's normals facing away from the camera along each axis: lights whose
+depth axis is their x or y) and frame_check (the image-plane reading the normals fit best: y
+negated, x and y swapped, ...). With 1 or 2 images (material with
 kd required) the global solver with smoothness, integrability and boundary priors runs instead and
 the result has ambiguity_deg (H, W): the angle the data alone leaves open per pixel; it needs
 about 4 kB a masked pixel, and ValueError says so before it starts when that is more than

@@ -27,7 +27,7 @@ struct DepthAxisCheck {
   double best_facing = 0;  // the fraction facing away from that axis (0 when none is better)
   // Empty unless another axis is clearly the depth axis: at least kDepthAxisShare of the normals
   // face away as given and at most a fifth as many away from the other axis. One sentence then,
-  // e.g. "Woodham's normals face away from the camera at 50% of 20000 pixels; with the file's y
+  // e.g. "Woodham's normals face away from the camera at 50% of 20000 pixels; with the lights' y
   // as the depth axis (toward the camera) at 0.0%".
   std::string message;
 };

@@ -97,8 +97,8 @@ def test_in_bands_of_rows_the_same_check_runs_on_the_field_averaged_down(sphere,
 # follow any orthogonal change of the lights' frame, face away from the camera at about half the
 # pixels (solve/depth_axis.h). Said before the solve; the image-plane check is not run then.
 DEPTH_SLIPS = {
-    "x is the depth": (lambda x, y, z: (z, y, x), "with the file's x as the depth axis"),
-    "y is the depth": (lambda x, y, z: (x, z, y), "with the file's y as the depth axis"),
+    "x is the depth": (lambda x, y, z: (z, y, x), "with the lights' x as the depth axis"),
+    "y is the depth": (lambda x, y, z: (x, z, y), "with the lights' y as the depth axis"),
 }
 
 

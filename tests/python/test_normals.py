@@ -186,3 +186,37 @@ def test_model_chosen_by_held_out_prediction_unless_named():
                                     r["mask"], model="blinn-phong")
     assert named["model"] == "blinn-phong"
     assert {s["model"] for s in named["model_scores"]} == {"blinn-phong"}
+
+
+@pytest.mark.parametrize("order, axis", [((0, 1, 2), None), ((2, 1, 0), "x"), ((0, 2, 1), "y")])
+def test_lights_in_another_frame_are_named(order, axis):
+    """As `iphong normals` checks a light file: light directions whose depth axis is their x or y
+    (a numpy-rendered Lambertian sphere, its lights' columns exchanged) give Woodham's normals
+    facing away from the camera at about half the pixels, named before the solve; lights with y
+    negated are named by the normals' image-plane frame; the right lights say nothing."""
+    import warnings
+    from brdf_zoo import sphere
+    n, mask = sphere(48)
+    golden = np.pi * (3 - np.sqrt(5))
+    z = 1 - 0.6 * (np.arange(20) + 0.5) / 20
+    lights = np.stack([np.sqrt(1 - z * z) * np.cos(golden * np.arange(20)),
+                       np.sqrt(1 - z * z) * np.sin(golden * np.arange(20)), z], -1)
+    images = np.asarray([0.7 * np.clip(n @ l, 0, None)[..., None].repeat(3, -1) * mask[..., None]
+                         for l in lights], np.float32)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = iphong.estimate_normals(images, lights[:, order], mask=mask, model="lambert")
+    said = [str(w.message) for w in caught if "another frame" in str(w.message)]
+    if axis is None:
+        assert said == [] and r["depth_axis_check"]["facing_away"] < 0.01
+        assert r["frame_check"] == "as given"
+        with pytest.warns(UserWarning, match=r"light_directions look like another frame: read "
+                                             r"with y negated"):
+            iphong.estimate_normals(images, lights * [1, -1, 1], mask=mask, model="lambert")
+    else:
+        assert len(said) == 1, said
+        assert said[0].startswith("light_directions look like another frame: Woodham's normals "
+                                  "face away from the camera at "), said[0]
+        assert f"with the lights' {axis} as the depth axis" in said[0], said[0]
+        assert r["depth_axis_check"]["best_axis"] == axis
+        assert "frame_check" not in r

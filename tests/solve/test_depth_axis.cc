@@ -59,10 +59,10 @@ TEST(DepthAxis, AFileWhoseXOrYIsTheDepthAxisIsNamed) {
     const char* named;
   };
   const Case cases[] = {
-      {[](const Vec3d& l) { return Vec3d(l.z(), l.y(), l.x()); }, 0, 1, "file's x as the depth"},
-      {[](const Vec3d& l) { return Vec3d(l.x(), l.z(), l.y()); }, 1, 1, "file's y as the depth"},
+      {[](const Vec3d& l) { return Vec3d(l.z(), l.y(), l.x()); }, 0, 1, "lights' x as the depth"},
+      {[](const Vec3d& l) { return Vec3d(l.x(), l.z(), l.y()); }, 1, 1, "lights' y as the depth"},
       // A dome described with z up and the camera looking along +y: the file's −y is the depth.
-      {[](const Vec3d& l) { return Vec3d(l.x(), -l.z(), l.y()); }, 1, -1, "file's -y as the depth"},
+      {[](const Vec3d& l) { return Vec3d(l.x(), -l.z(), l.y()); }, 1, -1, "lights' -y as the depth"},
   };
   for (const Case& k : cases) {
     SCOPED_TRACE(k.named);
