@@ -415,6 +415,12 @@ void WriteSingleOutputFile(const std::string& command, const std::string& path, 
   std::error_code error;
   const fs::file_status status = fs::symlink_status(target, error);
   if (fs::is_directory(status)) Refuse(path + ": is a folder; name a file for the output");
+  // A file is written where its folder is: one that is missing is a typo as often as not.
+  if (!fs::is_directory(target.parent_path(), error)) {
+    const std::string where = fs::path(path).parent_path().string();
+    Refuse(path + ": its folder " + (where.empty() ? target.parent_path().string() : where) +
+           " does not exist; create it, or name a file in a folder that does");
+  }
   if (fs::exists(status) && !overwrite) {
     Refuse(path + ": exists; pass --overwrite to replace it, or name a new file");
   }

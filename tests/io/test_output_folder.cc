@@ -324,6 +324,14 @@ TEST_F(OutputFolderTest, SingleFilesAreNewUnlessOverwrite) {
                                      [](const std::string&) { throw OutputError("disk full"); }),
                OutputError);
   EXPECT_EQ(Names(dir_.string()), (std::set<std::string>{"map.png", ".iphong-manifest.json"}));
+  // A missing folder is named as such (it was "DIR/.map.iphong-partial-…: cannot write: No such
+  // file or directory"), and nothing is made.
+  EXPECT_EQ(ErrorOf([&] {
+              WriteSingleOutputFile("test", Path("nope/map.png"), false, {}, write("five"));
+            }),
+            Path("nope/map.png") + ": its folder " + Path("nope") +
+                " does not exist; create it, or name a file in a folder that does");
+  EXPECT_FALSE(fs::exists(Path("nope")));
 }
 
 // --overwrite replaces only what iphong wrote there and nobody changed since: a user's file of
