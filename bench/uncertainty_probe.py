@@ -17,9 +17,12 @@ Two predictions, each the expected angle √(π/4 · tr C) of the normal block o
               residuals between lights (over its pixels), scaled to the pixel's own misfit: the
               error if every pixel's misfit were drawn from the object's, correlated between
               lights as the object's is.
+  lambert-angle  the angle between the default's normal and Lambert's: how far the model moves it;
+  halves      half the angle between the normals of two runs, on the even and on the odd lights.
 Measured 2026-11-27 on the eight shared captures: classic 1.5–7.9 times too small (median of
 true/predicted), misfit-cov 0.6–5.3 times; Spearman 0.02–0.57 and −0.07–0.49, under 0.5 on every
-DiLiGenT object for both.
+DiLiGenT object for both. 2026-12-02: lambert-angle Spearman −0.26 to 0.43 on the DiLiGenT runs
+(0.86 on the bunny, whose error is where Lambert's shadows are), halves −0.22 to 0.42.
 
     PYTHONPATH=build/python /usr/bin/python3 bench/uncertainty_probe.py [FOLDER...]
 """
@@ -115,8 +118,20 @@ def probe(folder):
     misfit = bread @ meat @ bread
     where = folder.resolve()
     name = where.relative_to(DATA.resolve()) if where.is_relative_to(DATA.resolve()) else folder
-    for label, c in [("classic", classic), ("misfit-cov", misfit)]:
-        predicted = np.degrees(np.sqrt(np.maximum(np.pi / 4 * (c[:, 0, 0] + c[:, 1, 1]), 0)))
+    # Two predictions from other runs, not from the fit: how far the normal moves with the model
+    # (the default against Lambert's) and with the lights (two runs on the even and the odd
+    # lights, half their angle).
+    lambert = iphong.estimate_normals(d["images"], lights, intensities, mask, model="lambert")
+    k = np.arange(len(lights)) % 2 == 0
+    halves = [iphong.estimate_normals(d["images"][s], lights[s], intensities[s], mask,
+                                      light_distance="inf")["normals"][mask] for s in (k, ~k)]
+    other = {"lambert-angle": angle(n, lambert["normals"][mask].astype(float)),
+             "halves": angle(halves[0].astype(float), halves[1].astype(float)) / 2}
+    for label, c in [("classic", classic), ("misfit-cov", misfit), *other.items()]:
+        if label in other:
+            predicted = c
+        else:
+            predicted = np.degrees(np.sqrt(np.maximum(np.pi / 4 * (c[:, 0, 0] + c[:, 1, 1]), 0)))
         ok = np.isfinite(predicted) & (predicted > 0) & np.isfinite(error)
         print(f"| {name} | {label} | {error[ok].mean():.2f} | {np.median(predicted[ok]):.2f} | "
               f"{spearman(error[ok], predicted[ok]):.2f} | "
