@@ -85,28 +85,40 @@ nlohmann::json CheckEncoding(const NormalsCommandOptions& o, const io::Dataset& 
           {"seconds", c.seconds}};
 }
 
+namespace {
+
+// A file with most lights behind the object (z < 0) has had its own warning: its fix (y and z
+// negated) is not another reading of its axes.
+bool MostLightsBehind(const std::vector<Vec3d>& lights_cam) {
+  std::size_t behind = 0;
+  for (const Vec3d& l : lights_cam) behind += l.z() < 0;
+  return 2 * behind > lights_cam.size();
+}
+
+// What a frame check found, said of the light file: a warning, or with --strict an error.
+void SayLightFrame(const NormalsCommandOptions& o, const io::Dataset& dataset,
+                   const std::string& found) {
+  const std::string& lights = dataset.files.lights_path;
+  const std::string text = (lights.empty() ? o.dataset : lights) +
+                           ": the light directions look like another frame: " + found +
+                           "; check the file's axes (x right, y up toward row 0, z toward the "
+                           "camera)" +
+                           (o.strict ? "" : ", or pass --strict to refuse such a file");
+  if (o.strict) throw std::runtime_error(text);
+  Warn(text);
+}
+
+}  // namespace
+
 std::optional<integrate::FrameCheckResult> CheckLightFrame(const NormalsCommandOptions& o,
                                                            const io::Dataset& dataset,
                                                            const ImageF& normals,
                                                            const Mask& with_normal) {
-  // A file with most lights behind the object (z < 0) has had its own warning: its fix (y and z
-  // negated) is not a reading of the image plane.
-  std::size_t behind = 0;
-  for (const Vec3d& l : dataset.light_directions) behind += l.z() < 0;
-  if (2 * behind > dataset.light_directions.size()) return std::nullopt;
+  if (MostLightsBehind(dataset.light_directions)) return std::nullopt;
   integrate::FrameCheckOptions check;
   check.threads = o.common.threads;
   integrate::FrameCheckResult frame = integrate::CheckNormalFrame(normals, with_normal, check);
-  if (!frame.message.empty()) {
-    const std::string& lights = dataset.files.lights_path;
-    const std::string text = (lights.empty() ? o.dataset : lights) +
-                             ": the light directions look like another frame: " + frame.message +
-                             "; check the file's axes (x right, y up toward row 0, z toward the "
-                             "camera)" +
-                             (o.strict ? "" : ", or pass --strict to refuse such a file");
-    if (o.strict) throw std::runtime_error(text);
-    Warn(text);
-  }
+  if (!frame.message.empty()) SayLightFrame(o, dataset, frame.message);
   return frame;
 }
 
@@ -119,19 +131,8 @@ nlohmann::json CheckDepthAxis(const NormalsCommandOptions& o, const io::Dataset&
 nlohmann::json ReportDepthAxis(const NormalsCommandOptions& o, const io::Dataset& dataset,
                                const std::vector<Vec3d>& lights_cam,
                                const solve::DepthAxisCheck& c) {
-  std::size_t behind = 0;
-  for (const Vec3d& l : lights_cam) behind += l.z() < 0;
-  if (c.pixels == 0 || 2 * behind > lights_cam.size()) return nullptr;
-  if (!c.message.empty()) {
-    const std::string& lights = dataset.files.lights_path;
-    const std::string text = (lights.empty() ? o.dataset : lights) +
-                             ": the light directions look like another frame: " + c.message +
-                             "; check the file's axes (x right, y up toward row 0, z toward the "
-                             "camera)" +
-                             (o.strict ? "" : ", or pass --strict to refuse such a file");
-    if (o.strict) throw std::runtime_error(text);
-    Warn(text);
-  }
+  if (c.pixels == 0 || MostLightsBehind(lights_cam)) return nullptr;
+  if (!c.message.empty()) SayLightFrame(o, dataset, c.message);
   nlohmann::json j = {{"pixels", c.pixels},
                       {"facing_away", c.facing_away},
                       {"best_axis", std::string(c.best_sign < 0 ? "-" : "") + "xyz"[c.best_axis]},
