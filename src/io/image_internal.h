@@ -32,6 +32,16 @@ DataPlacement PlacementOf(OIIO::ImageInput& in);
 void PlaceRows(const float* data, int data_width, int data_y0, int rows, int channels,
                const DataPlacement& place, int band_y0, ImageF& band);
 
+// Which channels of a file are its picture. An EXR of several layers (Blender's multilayer
+// output: "ViewLayer.AO.R", …, "ViewLayer.Combined.R", …) lists its passes in name order, so its
+// first three channels may be any pass; the picture is the layer with R, G and B: the file's
+// unnamed layer, else its only one, else the one named Combined, beauty, rgba or color (its last
+// part, any case). Sets `first`, `count` (3, or 4 with its A) and `layer`; files of one layer, and
+// layers without R, G and B, keep every channel from the first. Throws std::runtime_error naming
+// the layers when several colour layers leave the picture unclear.
+void ColourLayer(const std::string& path, const OIIO::ImageSpec& spec, int* first, int* count,
+                 std::string* layer);
+
 // The header as displayed under `orientation` (kFileOrientation: the file's own), its
 // orientation field still the file's statement. Throws std::logic_error outside 0–8.
 ImageHeader Oriented(const ImageHeader& file_header, int orientation);

@@ -80,14 +80,19 @@ std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHead
   int orientation = spec.get_int_attribute("Orientation", 1);
   if (orientation < 1 || orientation > 8) orientation = 1;  // what viewers do with a bad tag
   const std::string format = in->format_name();
-  *header = {
-      place.display_width,
-      place.display_height,
-      spec.nchannels,
-      orientation,
-      spec.format.is_floating_point(),
-      spec.alpha_channel >= 0 && spec.alpha_channel < spec.nchannels ? spec.alpha_channel : -1,
-      format == "jpeg" || format == "webp" || format == "heif"};
+  int first = 0, count = spec.nchannels;
+  std::string layer;
+  internal::ColourLayer(path, spec, &first, &count, &layer);
+  const int alpha = spec.alpha_channel - first;
+  *header = {place.display_width,
+             place.display_height,
+             count,
+             first,
+             layer,
+             orientation,
+             spec.format.is_floating_point(),
+             alpha >= 0 && alpha < count ? alpha : -1,
+             format == "jpeg" || format == "webp" || format == "heif"};
   if (OrientationSwapsAxes(orientation)) std::swap(header->width, header->height);
   return in;
 }
@@ -95,6 +100,67 @@ std::unique_ptr<OIIO::ImageInput> OpenChecked(const std::string& path, ImageHead
 }  // namespace
 
 namespace internal {
+
+void ColourLayer(const std::string& path, const OIIO::ImageSpec& spec, int* first, int* count,
+                 std::string* layer) {
+  *first = 0, *count = spec.nchannels, layer->clear();
+  const int n = std::min<int>(spec.nchannels, static_cast<int>(spec.channelnames.size()));
+  const auto split = [](const std::string& name) {
+    const auto dot = name.rfind('.');
+    return dot == std::string::npos ? std::pair<std::string, std::string>{"", name}
+                                    : std::pair{name.substr(0, dot), name.substr(dot + 1)};
+  };
+  std::vector<std::string> layers;  // in file order, each once
+  for (int c = 0; c < n; ++c) {
+    const std::string l = split(spec.channelnames[c]).first;
+    if (std::find(layers.begin(), layers.end(), l) == layers.end()) layers.push_back(l);
+  }
+  if (layers.size() < 2) return;
+  // A layer's R, G, B in a row (OpenImageIO lists each layer's channels together, R G B A first).
+  const auto colour_at = [&](const std::string& l) {
+    for (int c = 0; c + 2 < n; ++c) {
+      if (spec.channelnames[c] == (l.empty() ? "" : l + ".") + "R" &&
+          spec.channelnames[c + 1] == (l.empty() ? "" : l + ".") + "G" &&
+          spec.channelnames[c + 2] == (l.empty() ? "" : l + ".") + "B") {
+        return c;
+      }
+    }
+    return -1;
+  };
+  std::vector<std::string> colour;
+  for (const std::string& l : layers) {
+    if (colour_at(l) >= 0) colour.push_back(l);
+  }
+  if (colour.empty()) return;
+  std::string chosen;
+  if (std::find(colour.begin(), colour.end(), "") != colour.end()) {
+    chosen = "";
+  } else if (colour.size() == 1) {
+    chosen = colour[0];
+  } else {
+    std::vector<std::string> beauty;
+    for (const std::string& l : colour) {
+      std::string last = split(l).second;
+      for (char& ch : last) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+      if (last == "combined" || last == "beauty" || last == "rgba" || last == "color") {
+        beauty.push_back(l);
+      }
+    }
+    if (beauty.size() != 1) {
+      std::string names;
+      for (const std::string& l : colour) names += (names.empty() ? "" : ", ") + l;
+      throw std::runtime_error(path + ": holds " + std::to_string(colour.size()) +
+                               " colour layers (" + names +
+                               ") and none is the picture (Combined, beauty, rgba or color): "
+                               "save the image pass alone, or name it so");
+    }
+    chosen = beauty[0];
+  }
+  *first = colour_at(chosen);
+  const std::string a = (chosen.empty() ? "" : chosen + ".") + "A";
+  *count = *first + 3 < n && spec.channelnames[*first + 3] == a ? 4 : 3;
+  *layer = chosen;
+}
 
 DataPlacement PlacementOf(OIIO::ImageInput& in) {
   const OIIO::ImageSpec& spec = in.spec();
@@ -287,8 +353,8 @@ ImageF ReadImage(const std::string& path, const MemoryLimit& memory,
   ImageF image(place.display_width, place.display_height, h.channels);
   ImageF data;
   if (!place.whole) data = ImageF(spec.width, spec.height, h.channels);
-  if (!in->read_image(0, 0, 0, h.channels, OIIO::TypeDesc::FLOAT,
-                      (place.whole ? image : data).pixels.data())) {
+  if (!in->read_image(0, 0, file.first_channel, file.first_channel + h.channels,
+                      OIIO::TypeDesc::FLOAT, (place.whole ? image : data).pixels.data())) {
     Fail(path, "cannot decode: " + in->geterror());
   }
   in->close();

@@ -43,11 +43,15 @@ bool OrientationSwapsAxes(int orientation);
 std::string DescribeOrientation(int orientation);
 
 struct ImageHeader {
-  int width = 0, height = 0, channels = 0;  // as displayed (after the orientation)
-  int orientation = 1;                      // as the file states it (1 when it states none)
-  bool is_float = false;                    // half or float samples: no code value clips at 1
-  int alpha_channel = -1;                   // the channel the file names alpha, −1: none
-  bool lossy = false;                       // a lossy format (JPEG, WebP, HEIF): values are blurred
+  // As displayed (after the orientation); the channels read: an EXR of several layers (a
+  // renderer's passes) is read as its colour layer (internal::ColourLayer), from first_channel.
+  int width = 0, height = 0, channels = 0;
+  int first_channel = 0;
+  std::string layer;       // that layer's name ("" when the file has one layer)
+  int orientation = 1;     // as the file states it (1 when it states none)
+  bool is_float = false;   // half or float samples: no code value clips at 1
+  int alpha_channel = -1;  // the channel the file names alpha, −1: none
+  bool lossy = false;      // a lossy format (JPEG, WebP, HEIF): values are blurred
 };
 
 // The size a file declares, read from its header only. Refuses what is not a regular file, a

@@ -55,12 +55,13 @@ ImageF ImageRowReader::ReadStoredRows(int y0, int y1, int shown_y0, int shown_y1
   std::vector<float> rows;
   if (!direct) rows.resize(std::size_t(spec.width) * (last - first) * c);
   float* to = direct ? band.pixels.data() : rows.data();
-  const bool ok = spec.tile_width > 0 && spec.tile_height > 0
-                      ? in_->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + first,
-                                        spec.y + last, spec.z, spec.z + std::max(1, spec.depth), 0,
-                                        c, OIIO::TypeDesc::FLOAT, to)
-                      : in_->read_scanlines(0, 0, spec.y + first, spec.y + last, 0, 0, c,
-                                            OIIO::TypeDesc::FLOAT, to);
+  const bool ok =
+      spec.tile_width > 0 && spec.tile_height > 0
+          ? in_->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + first, spec.y + last,
+                            spec.z, spec.z + std::max(1, spec.depth), header_.first_channel,
+                            header_.first_channel + c, OIIO::TypeDesc::FLOAT, to)
+          : in_->read_scanlines(0, 0, spec.y + first, spec.y + last, 0, header_.first_channel,
+                                header_.first_channel + c, OIIO::TypeDesc::FLOAT, to);
   if (!ok) fail();
   if (!direct)
     internal::PlaceRows(rows.data(), spec.width, first, last - first, c, place, y0, band);

@@ -1,6 +1,7 @@
 // Image files: round trips through PNG (8/16-bit) and EXR, atomic writes, errors naming the file.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -459,6 +460,69 @@ TEST_F(OrientationTest, EveryCodeIsReadAsViewersShowIt) {
     EXPECT_EQ(ImageRowReader(path, 1).ReadRows(0, 4).pixels, stored.pixels);
   }
   EXPECT_EQ(DescribeOrientation(6), "turned 90° clockwise");
+}
+
+// An EXR of several layers (Blender's multilayer output) lists its passes in name order: its
+// first three channels were read as the picture, here the AO pass. Its colour layer is read, whole
+// and in bands; two colour layers neither of which is the beauty pass are refused, naming them.
+TEST_F(ImageIoTest, ALayeredExrIsReadAsItsColourLayer) {
+  const int w = 6, h = 5;
+  const auto write = [&](const std::string& name, const std::vector<std::string>& channels) {
+    OIIO::ImageSpec spec(w, h, static_cast<int>(channels.size()), OIIO::TypeDesc::FLOAT);
+    spec.channelnames = channels;
+    spec.alpha_channel = -1;
+    std::vector<float> data(std::size_t(w) * h * channels.size());
+    for (std::size_t i = 0; i < data.size(); ++i) {
+      const std::size_t c = i % channels.size();  // each channel's values its own
+      data[i] = static_cast<float>(100 * c + i / channels.size());
+    }
+    auto out = OIIO::ImageOutput::create(Path(name));
+    ASSERT_TRUE(out && out->open(Path(name), spec) &&
+                out->write_image(OIIO::TypeDesc::FLOAT, data.data()) && out->close());
+  };
+  // The value of channel `name` at pixel i as this file reads back through OpenImageIO itself.
+  const auto stored = [&](const std::string& path, const std::string& name, std::size_t i) {
+    auto in = OIIO::ImageInput::open(path);
+    const OIIO::ImageSpec& spec = in->spec();
+    std::vector<float> all(std::size_t(w) * h * spec.nchannels);
+    in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data());
+    const auto it = std::find(spec.channelnames.begin(), spec.channelnames.end(), name);
+    return all[i * spec.nchannels + (it - spec.channelnames.begin())];
+  };
+  write("layers.exr", {"ViewLayer.AO.R", "ViewLayer.AO.G", "ViewLayer.AO.B", "ViewLayer.Combined.R",
+                       "ViewLayer.Combined.G", "ViewLayer.Combined.B", "ViewLayer.Combined.A",
+                       "ViewLayer.Depth.Z"});
+  const ImageHeader header = ReadImageHeader(Path("layers.exr"));
+  EXPECT_EQ(header.layer, "ViewLayer.Combined");
+  EXPECT_EQ(header.channels, 4);
+  EXPECT_EQ(header.alpha_channel, 3);
+  const ImageF read = ReadImage(Path("layers.exr"));
+  ASSERT_EQ(read.channels, 4);
+  const ImageF rows = ImageRowReader(Path("layers.exr")).ReadRows(0, h);
+  for (std::size_t i = 0; i < std::size_t(w) * h; ++i) {
+    int c = 0;
+    for (const char* suffix : {"R", "G", "B", "A"}) {
+      const float want = stored(Path("layers.exr"), std::string("ViewLayer.Combined.") + suffix, i);
+      ASSERT_EQ(read.pixels[4 * i + c], want) << i << suffix;
+      ASSERT_EQ(rows.pixels[4 * i + c], want) << i << suffix;
+      ++c;
+    }
+  }
+  write("passes.exr",
+        {"diffuse.R", "diffuse.G", "diffuse.B", "specular.R", "specular.G", "specular.B"});
+  try {
+    ReadImage(Path("passes.exr"));
+    ADD_FAILURE() << "two colour passes were read as one picture";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("holds 2 colour layers (diffuse, specular) and none is "
+                                         "the picture"),
+              std::string::npos)
+        << e.what();
+  }
+  // One layer, or layers without colour: every channel from the first, as before.
+  write("normal.exr", {"Normal.X", "Normal.Y", "Normal.Z", "Depth.Z"});
+  EXPECT_EQ(ReadImageHeader(Path("normal.exr")).channels, 4);
+  EXPECT_EQ(ReadImageHeader(Path("normal.exr")).layer, "");
 }
 
 // OpenEXR keeps a data window inside a display window (a renderer's image cropped to what its
