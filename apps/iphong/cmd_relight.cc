@@ -130,6 +130,29 @@ void RunRelight(const RelightCommandOptions& o) {
     io::WriteSingleOutputFile("relight", o.output, o.common.overwrite, inputs,
                               [&](const std::string& temp) { io::WriteTextFile(temp, page); });
   } else {
+    // A light given as the direction light travels (toward the surface) reaches no pixel: the
+    // image is black, or the ambient term alone, which looks like a bad result, not a bad flag.
+    std::size_t lit = 0, with_normal = 0;
+    for (std::size_t p = 0; p < normals.pixel_count(); ++p) {
+      const Vec3d n(normals.pixels[3 * p], normals.pixels[3 * p + 1], normals.pixels[3 * p + 2]);
+      if (!(n.squaredNorm() > 0)) continue;
+      ++with_normal;
+      for (const auto& light : input.lights) {
+        if (n.dot(light.direction_cam) > 0) {
+          ++lit;
+          break;
+        }
+      }
+    }
+    // At most 1 %: the silhouette's few normals that tilt past the view see any light behind.
+    if (with_normal > 0 && 100 * lit <= with_normal) {
+      const bool one = input.lights.size() == 1;
+      Warn(std::string("--light: ") + (one ? "the light lights " : "the lights light ") +
+           std::to_string(lit) + " of " + std::to_string(with_normal) +
+           " pixels (N.L > 0): " + (one ? "it is" : "they are") +
+           " behind the surface. A light direction points from the surface toward the light (x "
+           "right, y up, z toward the camera)");
+    }
     const ImageF image = render::Relight(input);
     io::WriteSingleOutputFile("relight", o.output, o.common.overwrite, inputs,
                               [&](const std::string& temp) {

@@ -189,3 +189,20 @@ def test_relight_json_reports_the_run_for_scripts(tmp_path):
     assert report["shading"].startswith("phong from") and report["exposure"] > 0
     code, out, err = run("relight", data, "--light", "0,0,1", "-o", tmp_path / "q.png", "-q")
     assert code == 0 and out == "", (out, err)
+
+
+def test_a_light_behind_the_surface_is_said(tmp_path):
+    """--light 0,0,-1 (the direction light travels, not the way to the light) lit nothing and
+    wrote a black picture without a word; a light from the side, lighting part of the sphere,
+    says nothing."""
+    data = tmp_path / "sphere"
+    render_dataset(data)
+    code, _, err = run("normals", data, "-o", tmp_path / "n", "-q")
+    assert code == 0, err
+    code, _, err = run("relight", tmp_path / "n", "--light", "0,0,-1", "-o", tmp_path / "a.png")
+    assert code == 0 and (tmp_path / "a.png").exists(), err
+    warnings = [line for line in err.splitlines() if line.startswith("iphong: warning: --light")]
+    assert len(warnings) == 1 and "it is behind the surface" in warnings[0], err
+    code, _, err = run("relight", tmp_path / "n", "--light", "0.9,0,-0.1", "-o",
+                       tmp_path / "b.png")
+    assert code == 0 and "behind the surface" not in err, err
