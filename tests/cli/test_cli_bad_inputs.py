@@ -282,6 +282,7 @@ SCENE_CASES = [
     # It said "outside the camera's view" of a mesh in the middle of it.
     ("seen_from_behind.json", 1, r"nothing is visible: every face in the camera's view is seen "
                                  r"from behind"),
+    ("faces_of_no_area.json", 1, r"nothing is visible: every face of the objects has no area"),
     ("point_light_per_light.json", 1, r"light 1 is a point light without falloff"),
     ("corrupt_mesh.json", 1, r"not_a_mesh\.ply: declares 1000000000 vertex and 1000000000 face"),
     ("ks_is_a_string.json", 1, r"objects\[0\]\.material\.ks: expected 3 numbers"),
