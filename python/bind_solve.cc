@@ -421,9 +421,8 @@ depend on its own observations and the plan only, so any blocking gives the same
         // the photos say): its depth axis first, from Woodham's unconstrained normals; the image
         // plane's readings then from the normals recovered. Not for near lights, nor for lights
         // mostly behind the object (the fix is not a reading), nor one or two images.
-        std::size_t behind = 0;
-        for (const Vec3d& l : data.light_directions) behind += l.z() < 0;
-        const bool check_frame = light_positions.is_none() && k >= 3 && 2 * behind <= k;
+        const bool check_frame =
+            light_positions.is_none() && k >= 3 && !solve::MostLightsBehind(data.light_directions);
         const auto warn = [](const std::string& what) {
           py::module_::import("warnings")
               .attr("warn")("light_directions look like another frame: " + what +
@@ -434,8 +433,7 @@ depend on its own observations and the plan only, so any blocking gives the same
           const solve::DepthAxisCheck c = solve::CheckDepthAxis(data);
           out["depth_axis_check"] = py::dict(
               py::arg("pixels") = c.pixels, py::arg("facing_away") = c.facing_away,
-              py::arg("best_axis") = std::string(c.best_sign < 0 ? "-" : "") + "xyz"[c.best_axis],
-              py::arg("best_facing_away") = c.best_facing);
+              py::arg("best_axis") = c.BestAxisName(), py::arg("best_facing_away") = c.best_facing);
           depth_slip = !c.message.empty();
           if (depth_slip) warn(c.message);
         }

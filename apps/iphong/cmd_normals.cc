@@ -87,14 +87,6 @@ nlohmann::json CheckEncoding(const NormalsCommandOptions& o, const io::Dataset& 
 
 namespace {
 
-// A file with most lights behind the object (z < 0) has had its own warning: its fix (y and z
-// negated) is not another reading of its axes.
-bool MostLightsBehind(const std::vector<Vec3d>& lights_cam) {
-  std::size_t behind = 0;
-  for (const Vec3d& l : lights_cam) behind += l.z() < 0;
-  return 2 * behind > lights_cam.size();
-}
-
 // What a frame check found, said of the light file: a warning, or with --strict an error.
 void SayLightFrame(const NormalsCommandOptions& o, const io::Dataset& dataset,
                    const std::string& found) {
@@ -114,7 +106,7 @@ std::optional<integrate::FrameCheckResult> CheckLightFrame(const NormalsCommandO
                                                            const io::Dataset& dataset,
                                                            const ImageF& normals,
                                                            const Mask& with_normal) {
-  if (MostLightsBehind(dataset.light_directions)) return std::nullopt;
+  if (solve::MostLightsBehind(dataset.light_directions)) return std::nullopt;
   integrate::FrameCheckOptions check;
   check.threads = o.common.threads;
   integrate::FrameCheckResult frame = integrate::CheckNormalFrame(normals, with_normal, check);
@@ -131,11 +123,11 @@ nlohmann::json CheckDepthAxis(const NormalsCommandOptions& o, const io::Dataset&
 nlohmann::json ReportDepthAxis(const NormalsCommandOptions& o, const io::Dataset& dataset,
                                const std::vector<Vec3d>& lights_cam,
                                const solve::DepthAxisCheck& c) {
-  if (c.pixels == 0 || MostLightsBehind(lights_cam)) return nullptr;
+  if (c.pixels == 0 || solve::MostLightsBehind(lights_cam)) return nullptr;
   if (!c.message.empty()) SayLightFrame(o, dataset, c.message);
   nlohmann::json j = {{"pixels", c.pixels},
                       {"facing_away", c.facing_away},
-                      {"best_axis", std::string(c.best_sign < 0 ? "-" : "") + "xyz"[c.best_axis]},
+                      {"best_axis", c.BestAxisName()},
                       {"best_facing_away", c.best_facing}};
   if (!c.message.empty()) j["warning"] = c.message;
   return j;

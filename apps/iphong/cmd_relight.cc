@@ -132,18 +132,8 @@ void RunRelight(const RelightCommandOptions& o) {
   } else {
     // A light given as the direction light travels (toward the surface) reaches no pixel: the
     // image is black, or the ambient term alone, which looks like a bad result, not a bad flag.
-    std::size_t lit = 0, with_normal = 0;
-    for (std::size_t p = 0; p < normals.pixel_count(); ++p) {
-      const Vec3d n(normals.pixels[3 * p], normals.pixels[3 * p + 1], normals.pixels[3 * p + 2]);
-      if (!(n.squaredNorm() > 0)) continue;
-      ++with_normal;
-      for (const auto& light : input.lights) {
-        if (n.dot(light.direction_cam) > 0) {
-          ++lit;
-          break;
-        }
-      }
-    }
+    const render::RelightCoverage coverage = render::LitPixels(input);
+    const std::size_t lit = coverage.lit, with_normal = coverage.surface;
     // At most 1 %: the silhouette's few normals that tilt past the view see any light behind.
     if (with_normal > 0 && 100 * lit <= with_normal) {
       const bool one = input.lights.size() == 1;

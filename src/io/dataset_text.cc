@@ -272,9 +272,8 @@ void NormalizeDirections(std::vector<Vec3d>& directions, const std::string& sour
   // A light behind the surface's plane as seen from the camera reaches only what faces away from
   // it: a few such lights are a rim setup, most of them a file in another frame (OpenCV's and
   // many renderers': y down, z into the scene), which gives normals turned inside out.
-  std::size_t behind = 0;
-  for (const Vec3d& d : directions) behind += d.z() < 0;
-  if (warnings && 2 * behind > directions.size()) {
+  const std::size_t behind = solve::LightsBehind(directions);
+  if (warnings && solve::MostLightsBehind(directions)) {
     warnings->push_back(source + ": " + std::to_string(behind) + " of " +
                         std::to_string(directions.size()) +
                         " light directions point away from the camera (z < 0); iphong's frame "

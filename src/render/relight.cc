@@ -60,6 +60,24 @@ std::string RelightInput::Validate() const {
   return "";
 }
 
+RelightCoverage LitPixels(const RelightInput& in) {
+  RelightCoverage c;
+  if (!in.normals_cam) return c;
+  for (std::size_t p = 0; p < in.normals_cam->pixel_count(); ++p) {
+    const float* n = in.normals_cam->pixels.data() + 3 * p;
+    const Vec3d normal(n[0], n[1], n[2]);
+    if (!normal.allFinite() || normal.squaredNorm() == 0) continue;
+    ++c.surface;
+    for (const reflectance::Light& light : in.lights) {
+      if (normal.dot(light.direction_cam) > 0) {
+        ++c.lit;
+        break;
+      }
+    }
+  }
+  return c;
+}
+
 ImageF Relight(const RelightInput& in) {
   if (std::string m = in.Validate(); !m.empty()) throw std::invalid_argument(m);
   const int w = in.normals_cam->width, h = in.normals_cam->height;

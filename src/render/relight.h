@@ -36,4 +36,12 @@ struct RelightInput {
 // std::invalid_argument with Validate's message.
 ImageF Relight(const RelightInput& input);
 
+// Pixels with a surface (a finite, non-zero normal) and those of them some light reaches
+// (N·L > 0). A light given the way light travels (toward the surface) reaches only the few
+// silhouette normals that tilt past the view.
+struct RelightCoverage {
+  std::size_t surface = 0, lit = 0;
+};
+RelightCoverage LitPixels(const RelightInput& input);
+
 }  // namespace iphong::render

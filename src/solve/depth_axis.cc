@@ -48,9 +48,8 @@ DepthAxisCheck DepthAxisCounts::Result() const {
     char text[256];
     std::snprintf(text, sizeof text,
                   "Woodham's normals face away from the camera at %.0f%% of %zu pixels; with the "
-                  "lights' %s%c as the depth axis (toward the camera) at %.1f%%",
-                  100 * c.facing_away, c.pixels, c.best_sign < 0 ? "-" : "", "xyz"[c.best_axis],
-                  100 * c.best_facing);
+                  "lights' %s as the depth axis (toward the camera) at %.1f%%",
+                  100 * c.facing_away, c.pixels, c.BestAxisName().c_str(), 100 * c.best_facing);
     c.message = text;
   }
   return c;

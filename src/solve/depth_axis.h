@@ -30,6 +30,10 @@ struct DepthAxisCheck {
   // e.g. "Woodham's normals face away from the camera at 50% of 20000 pixels; with the lights' y
   // as the depth axis (toward the camera) at 0.0%".
   std::string message;
+
+  std::string BestAxisName() const {  // "x", "-y", "z", …
+    return std::string(best_sign < 0 ? "-" : "") + "xyz"[best_axis];
+  }
 };
 constexpr double kDepthAxisShare = 0.2;
 

@@ -34,17 +34,17 @@ AngularErrorMetrics CompareNormals(const ImageF& estimate, const ImageF& ground_
     m.error_deg.pixels[p] = static_cast<float>(angle);
   }
   if (errors.empty()) throw std::invalid_argument("no pixel has both an estimate and ground truth");
-  if (m.not_finite == errors.size()) {
+  if (m.missing == errors.size()) {  // every pixel missing: a blank map or another file
+    const std::string n = std::to_string(errors.size());
     throw std::invalid_argument(
-        "holds no finite normal where the ground truth has one (NaN or infinite at all " +
-        std::to_string(errors.size()) + " such pixels; the first at column " +
-        std::to_string(m.first_not_finite % estimate.width) + ", row " +
-        std::to_string(m.first_not_finite / estimate.width) + ")");
-  }
-  if (m.missing == errors.size()) {
-    throw std::invalid_argument("holds no normal where the ground truth has one (0" +
-                                std::string(m.not_finite > 0 ? ", NaN or infinite" : "") +
-                                " at all " + std::to_string(errors.size()) + " such pixels)");
+        m.not_finite == errors.size()
+            ? "holds no finite normal where the ground truth has one (NaN or infinite at all " + n +
+                  " such pixels; the first at column " +
+                  std::to_string(m.first_not_finite % estimate.width) + ", row " +
+                  std::to_string(m.first_not_finite / estimate.width) + ")"
+            : "holds no normal where the ground truth has one (0" +
+                  std::string(m.not_finite > 0 ? ", NaN or infinite" : "") + " at all " + n +
+                  " such pixels)");
   }
   m.pixels = errors.size();
   double sum = 0;

@@ -8,6 +8,12 @@
 
 namespace iphong::solve {
 
+std::size_t LightsBehind(const std::vector<Vec3d>& light_directions) {
+  std::size_t behind = 0;
+  for (const Vec3d& l : light_directions) behind += l.z() < 0;
+  return behind;
+}
+
 std::string CheckLightSpan(const std::vector<Vec3d>& light_directions) {
   if (light_directions.size() < 3) return "";
   Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();

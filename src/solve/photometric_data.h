@@ -84,6 +84,15 @@ void SetReferenceLights(PhotometricData& data, const Vec3d& reference_cam);
 // plane is not determined by any pixel's shading. One or two lights are left to the global solver.
 std::string CheckLightSpan(const std::vector<Vec3d>& light_directions);
 
+// Lights behind the surface's plane as the camera sees it (z < 0). A few are a rim setup; more
+// than half is a file in another frame (y down and z into the scene), whose fix (y and z negated)
+// is not another reading of the image plane or of the depth axis: the frame checks leave it to
+// the light file's own warning.
+std::size_t LightsBehind(const std::vector<Vec3d>& light_directions);
+inline bool MostLightsBehind(const std::vector<Vec3d>& light_directions) {
+  return 2 * LightsBehind(light_directions) > light_directions.size();
+}
+
 // The step of the integer codes the values are, 1/(2^b − 1) for the fewest bits b in 8…16 that
 // put every value within 1 % of a step of a code (an 8-bit file read as linear: 1/255), or 0
 // when they are not codes (floating-point files, downscaled or sRGB-decoded ones).
