@@ -69,6 +69,14 @@ PixelModelTest TestPixelModel(NormalSearch& search, const CandidateTable& table,
                               std::vector<double>& buffer, double* lambert_cost,
                               double* model_cost);
 
+// Sets a search that the per-pixel test will run near its pixels' answers (either model's) for
+// the test's folds `table.fold()`: under leave-one-out each fold keeps all lights but one, and
+// its search scores the members of the best kLeaveOneOutCoarse coarse directions and refits
+// kLeaveOneOutRefits of them; otherwise all 12 and every refit (NormalSearch::NarrowNearLast).
+constexpr int kLeaveOneOutCoarse = 3;
+constexpr int kLeaveOneOutRefits = 4;
+void PreparePixelTestSearch(NormalSearch& search, const CandidateTable& table);
+
 // m's held-out cost, its standard error and fold angle: the means over the pixels given.
 void SetHeldOutSummary(ModelCandidate& m, const std::vector<double>& cost,
                        const std::vector<double>& angle);

@@ -370,6 +370,10 @@ NormalResult SolveNormalsWithPlan(const PhotometricData& data, const NormalPlan&
               table, 16,
               fit.ks_prior ? std::optional(internal::Luminance(*fit.ks_prior)) : std::nullopt,
               fit.ks_prior_weight);
+          if (per_pixel) {
+            internal::PreparePixelTestSearch(search, table);
+            internal::PreparePixelTestSearch(*lambert_search, *tables.lambert);
+          }
           std::vector<std::pair<double, int>> order;
           PixelLights woodham_lights(data);
           long long local = 0;

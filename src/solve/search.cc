@@ -135,7 +135,8 @@ NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optiona
     : table_(table),
       refine_(std::max(1, refine)),
       ks_prior_(ks_prior),
-      prior_weight_(prior_weight) {
+      prior_weight_(prior_weight),
+      near_refits_(refine_) {
   y_.resize(table.lights());
   usable_.resize(table.lights());
   lit_.reserve(table.lights());
@@ -163,13 +164,15 @@ void NormalSearch::ScoreRange(int begin, int end, double t, const double* fixed_
   }
 }
 
-void NormalSearch::PackNear() {
+void NormalSearch::PackNear(std::size_t groups) {
   constexpr std::size_t W = kSearchLanes;
   const std::size_t k = table_.lights();
   near_.clear();
-  for (const int c : last_coarse_) {
-    const std::vector<int>& members = table_.members(c);
+  near_scored_ = 0;
+  for (std::size_t g = 0; g < std::min(groups, last_coarse_.size()); ++g) {
+    const std::vector<int>& members = table_.members(last_coarse_[g]);
     near_.insert(near_.end(), members.begin(), members.end());
+    if (g < static_cast<std::size_t>(near_coarse_)) near_scored_ = near_.size();
   }
   const std::size_t blocks = (near_.size() + W - 1) / W;
   near_diffuse_.assign(blocks * k * W, 0.0f);
@@ -393,15 +396,18 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
     std::make_heap(heap_.begin(), heap_.end());
     near_.clear();
   }
-  if (near_.empty()) PackNear();
+  // A full search packs every one of its best coarse directions' members; a near_last search
+  // that finds none packed (its own table's, NearTheLastOf) packs only those it scores.
+  if (near_.empty()) PackNear(near_last ? near_coarse_ : last_coarse_.size());
+  const std::size_t scored = near_last ? near_scored_ : near_.size();
   const std::size_t block = static_cast<std::size_t>(k) * kSearchLanes;
-  for (std::size_t i = 0; i < near_.size(); i += kSearchLanes) {
+  for (std::size_t i = 0; i < scored; i += kSearchLanes) {
     ScoreBlock(near_diffuse_.data() + (i / kSearchLanes) * block,
                near_specular_.data() + (i / kSearchLanes) * block, nullptr, near_.data() + i,
-               static_cast<int>(std::min<std::size_t>(kSearchLanes, near_.size() - i)), t,
-               fixed_ks);
+               static_cast<int>(std::min<std::size_t>(kSearchLanes, scored - i)), t, fixed_ks);
   }
-  const int top = std::min<int>(refine_, static_cast<int>(scores_.size()));
+  const int top =
+      std::min<int>(near_last ? near_refits_ : refine_, static_cast<int>(scores_.size()));
   RefitAndOrder(top, t, fixed_ks);
   SearchResult best;
   if (top == 0) return best;

@@ -20,6 +20,7 @@
 // Camera frame, V = (0, 0, 1).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -130,13 +131,22 @@ class NormalSearch {
   // fixed_ks: the luminance ks when known, else nullptr. Only the lights where `usable` is 1
   // count (a held-out fold sets the other half to 0). `near_last`: only the fine directions near
   // the last full search's best coarse ones (the same pixel's held-out halves, whose normals lie
-  // near the one all lights found), at a fifth of the cost.
+  // near the one all lights found), at a fifth of the cost; fewer with NarrowNearLast.
   SearchResult Search(const double* y, const double* usable, double t, const double* fixed_ks,
                       bool near_last = false);
   // The coarse directions the next `near_last` search looks near: those of `other`'s last full
   // search (a table over the same directions).
   void NearTheLastOf(const NormalSearch& other) {
     last_coarse_ = other.last_coarse_;
+    near_.clear();
+  }
+  // `near_last` searches score only the members of the last full search's best `coarse` coarse
+  // directions and refit only their best `refits` (by default all 12 and `refine`): for held-out
+  // folds that differ from all the lights by one light, whose winners lie nearer the all-lights
+  // answer than those of halves do (solve/heldout.cc).
+  void NarrowNearLast(int coarse, int refits) {
+    near_coarse_ = std::clamp(coarse, 1, kCoarseTop);
+    near_refits_ = std::clamp(refits, 1, refine_);
     near_.clear();
   }
 
@@ -164,9 +174,11 @@ class NormalSearch {
   // the screening's coefficients, the fit with the censoring's weights, and again where that
   // fit censors other observations than the screening's did (two rounds).
   void RefitBlock(const int* which, int count, double t, const double* fixed_ks);
-  // Packs the fine candidates near last_coarse_ (their members) into near_*: the same few are
-  // scored by every search near the last full one (a pixel's held-out folds, both models).
-  void PackNear();
+  // Packs the fine candidates near the first `groups` of last_coarse_ (their members) into
+  // near_*, grouped by coarse direction in last_coarse_'s order, and sets near_scored_ to how
+  // many of them belong to the first near_coarse_: the same few are scored by every search near
+  // the last full one (a pixel's held-out folds, both models).
+  void PackNear(std::size_t groups);
   const CandidateTable& table_;
   int refine_;
   std::optional<double> ks_prior_;
@@ -220,6 +232,8 @@ class NormalSearch {
   int keep_ = 16;
   std::vector<int> last_coarse_;
   std::vector<int> near_;  // the candidates packed in near_diffuse_/near_specular_ (empty: none)
+  std::size_t near_scored_ = 0;  // how many of near_ a near_last search scores (a prefix)
+  int near_coarse_ = kCoarseTop, near_refits_ = 16;
   std::vector<float> near_diffuse_, near_specular_;
   std::vector<int> refit_;  // the scores_ to refit
   std::vector<float> refit_diffuse_, refit_specular_, refit_weights_;

@@ -72,6 +72,8 @@ inline ProbeResult Probe(const ProbeCase& c, int draws, std::mt19937_64& rng) {
     const CandidateTable table(lights, model, c.model_shininess, 1000, fold);
     const CandidateTable lambert_table(lights, lambert, 1.0, 1000, fold);
     NormalSearch search(table), lambert_search(lambert_table);
+    internal::PreparePixelTestSearch(search, table);  // as the solver sets its searches
+    internal::PreparePixelTestSearch(lambert_search, lambert_table);
     const SearchResult r = search.Search(y.data(), usable.data(), t, nullptr);
     if (r.candidate < 0) continue;
     // The solver's own test (internal::TestPixelModel), without the object's ks prior.
