@@ -213,6 +213,10 @@ Raises ValueError for bad input (sizes, a NaN normal, too few lights: how many a
         const Vec3d e = ToRgb(intensity, "intensity");
         for (const Vec3d& d : directions)
           input.lights.push_back(reflectance::Light::Directional(d, e));
+        // Lights given the way light travels give a black image: said, as `iphong relight` says it.
+        if (const std::string note = render::LightsBehindNote(input); !note.empty()) {
+          py::module_::import("warnings").attr("warn")("light: " + note);
+        }
         ImageF image;
         {
           py::gil_scoped_release release;

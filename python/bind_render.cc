@@ -38,6 +38,11 @@ py::dict RenderScene(io::SceneFile file, bool per_light, const MemoryLimit& memo
   {
     py::gil_scoped_release release;
     out = render::Render(file.scene, file.options, per_light);
+    // A blank render is a scene mistake (what `iphong render` refuses), not a picture.
+    if (out.mask.count() == 0) {
+      throw std::invalid_argument("nothing is visible: " +
+                                  render::NothingVisibleReason(file.scene, file.options));
+    }
   }
   py::dict result;
   result["image"] = ToArray(out.image);

@@ -132,16 +132,8 @@ void RunRelight(const RelightCommandOptions& o) {
   } else {
     // A light given as the direction light travels (toward the surface) reaches no pixel: the
     // image is black, or the ambient term alone, which looks like a bad result, not a bad flag.
-    const render::RelightCoverage coverage = render::LitPixels(input);
-    const std::size_t lit = coverage.lit, with_normal = coverage.surface;
-    // At most 1 %: the silhouette's few normals that tilt past the view see any light behind.
-    if (with_normal > 0 && 100 * lit <= with_normal) {
-      const bool one = input.lights.size() == 1;
-      Warn(std::string("--light: ") + (one ? "the light lights " : "the lights light ") +
-           std::to_string(lit) + " of " + std::to_string(with_normal) +
-           " pixels (N.L > 0): " + (one ? "it is" : "they are") +
-           " behind the surface. A light direction points from the surface toward the light (x "
-           "right, y up, z toward the camera)");
+    if (const std::string note = render::LightsBehindNote(input); !note.empty()) {
+      Warn("--light: " + note);
     }
     const ImageF image = render::Relight(input);
     io::WriteSingleOutputFile("relight", o.output, o.common.overwrite, inputs,

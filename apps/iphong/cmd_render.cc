@@ -5,7 +5,6 @@
 #include <optional>
 
 #include "core/errors.h"
-#include "geometry/mesh.h"
 #include "io/dataset.h"
 #include "io/dataset_write.h"
 #include "io/output_folder.h"
@@ -65,27 +64,8 @@ void RunRender(const RenderCommandOptions& o) {
     throw std::invalid_argument(o.scene_path + ": " + e.what());
   }
   if (out.mask.count() == 0) {
-    // Faces seen from behind are culled: a mesh wound clockwise as the camera sees it is in view
-    // but hidden, which the scene's positions do not explain. One pass drawing both sides tells.
-    render::RenderOptions both = file.options;
-    both.two_sided = true;
-    both.progress = nullptr;
-    const bool from_behind = render::Render(file.scene, both, false).mask.count() > 0;
-    bool flat = true;  // every face has no area: its corners on a line
-    for (const auto& object : file.scene.objects) {
-      for (std::size_t t = 0; t < object.mesh.triangle_count() && flat; ++t) {
-        flat = geometry::FaceNormal(object.mesh, t).isZero();
-      }
-    }
-    throw std::runtime_error(
-        o.scene_path + ": nothing is visible: " +
-        (from_behind ? "every face in the camera's view is seen from behind (a mesh whose faces "
-                       "are wound clockwise as the camera sees them, or an object turned away: "
-                       "flip the mesh's faces or turn it)"
-         : flat      ? "every face of the objects has no area (its corners on a line): check the "
-                       "meshes"
-                     : "every object is outside the camera's view (check the camera and the "
-                       "objects' positions and sizes)"));
+    throw std::runtime_error(o.scene_path + ": nothing is visible: " +
+                             render::NothingVisibleReason(file.scene, file.options));
   }
   {
     Progress write("write", o.common.progress_mode());

@@ -263,9 +263,10 @@ def render(scene, per_light=False, max_memory_gb=None):
     all lights, images (K, H, W, 3) one per light when per_light, normals (H, W, 3) ground truth
     (0 outside the mask), depth (H, W), albedo (H, W, 3), mask (H, W) bool, light_directions (K, 3)
     and light_intensities (K, 3). Relative paths in a dict resolve against the working directory.
-    Raises ValueError naming the field on a bad scene, and when the render would need more memory
-    than max_memory_gb (default: three quarters of the machine's); TypeError for a scene that is
-    neither a dict nor a path.
+    Raises ValueError naming the field on a bad scene, when nothing is visible (saying why: faces
+    seen from behind, faces without area, or objects outside the view), and when the render would
+    need more memory than max_memory_gb (default: three quarters of the machine's); TypeError for a
+    scene that is neither a dict nor a path.
     """
     if isinstance(scene, dict):
         try:

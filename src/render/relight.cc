@@ -62,7 +62,7 @@ std::string RelightInput::Validate() const {
 
 RelightCoverage LitPixels(const RelightInput& in) {
   RelightCoverage c;
-  if (!in.normals_cam) return c;
+  if (!in.normals_cam || in.normals_cam->channels != 3) return c;  // Validate says why
   for (std::size_t p = 0; p < in.normals_cam->pixel_count(); ++p) {
     const float* n = in.normals_cam->pixels.data() + 3 * p;
     const Vec3d normal(n[0], n[1], n[2]);
@@ -76,6 +76,16 @@ RelightCoverage LitPixels(const RelightInput& in) {
     }
   }
   return c;
+}
+
+std::string LightsBehindNote(const RelightInput& in) {
+  const RelightCoverage c = LitPixels(in);
+  if (c.surface == 0 || 100 * c.lit > c.surface) return "";
+  const bool one = in.lights.size() == 1;
+  return std::string(one ? "the light lights " : "the lights light ") + std::to_string(c.lit) +
+         " of " + std::to_string(c.surface) + " pixels (N.L > 0): " + (one ? "it is" : "they are") +
+         " behind the surface. A light direction points from the surface toward the light (x "
+         "right, y up, z toward the camera)";
 }
 
 ImageF Relight(const RelightInput& in) {

@@ -43,5 +43,9 @@ struct RelightCoverage {
   std::size_t surface = 0, lit = 0;
 };
 RelightCoverage LitPixels(const RelightInput& input);
+// "" when the lights reach more than 1 % of the pixels with a surface (the silhouette's few
+// normals that tilt past the view see any light behind); otherwise what a user is told: the
+// lights are behind the surface, and which way a light direction points.
+std::string LightsBehindNote(const RelightInput& input);
 
 }  // namespace iphong::render

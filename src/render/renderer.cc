@@ -518,4 +518,26 @@ RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_l
   return out;
 }
 
+std::string NothingVisibleReason(const Scene& scene, const RenderOptions& options) {
+  // Faces seen from behind are culled: a mesh wound clockwise as the camera sees it is in view
+  // but hidden, which the scene's positions do not explain. One pass drawing both sides tells.
+  RenderOptions both = options;
+  both.two_sided = true;
+  both.progress = nullptr;
+  if (Render(scene, both, false).mask.count() > 0) {
+    return "every face in the camera's view is seen from behind (a mesh whose faces are wound "
+           "clockwise as the camera sees them, or an object turned away: flip the mesh's faces "
+           "or turn it)";
+  }
+  bool flat = true;  // every face has no area: its corners on a line
+  for (const SceneObject& object : scene.objects) {
+    for (std::size_t t = 0; t < object.mesh.triangle_count() && flat; ++t) {
+      flat = geometry::FaceNormal(object.mesh, t).isZero();
+    }
+  }
+  return flat ? "every face of the objects has no area (its corners on a line): check the meshes"
+              : "every object is outside the camera's view (check the camera and the objects' "
+                "positions and sizes)";
+}
+
 }  // namespace iphong::render

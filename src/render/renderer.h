@@ -85,6 +85,11 @@ struct RenderOutput {
 // ResourceError when EstimateRenderBytes exceeds options.memory.
 RenderOutput Render(const Scene& scene, const RenderOptions& options, bool per_light);
 
+// Why a render whose mask is empty shows nothing, as a sentence: every face in view seen from
+// behind (one more render drawing both sides finds it: a mesh wound clockwise as the camera sees
+// it, or an object turned away), every face without area, or every object outside the view.
+std::string NothingVisibleReason(const Scene& scene, const RenderOptions& options);
+
 // The memory Render allocates: the G-buffer, ground truth and one image per light set at the
 // supersampled size, the downsampled results, and the shadow maps.
 double EstimateRenderBytes(const Scene& scene, const RenderOptions& options, bool per_light);

@@ -2,6 +2,7 @@
 with their ground truth (issue 14's held-out figures), ValueError on bad input."""
 import os
 import pathlib
+import warnings
 
 import numpy as np
 import pytest
@@ -117,3 +118,10 @@ def test_relight_a_fitted_capture_under_one_of_its_lights():
         iphong.relight(r["normals"], fit["albedo"][:10], [0, 0, 1])
     with pytest.raises(ValueError, match="model"):
         iphong.relight(r["normals"], fit["albedo"], [0, 0, 1], model="cook-torrance")
+    # The direction light travels, not the way to the light: black, and said (as the CLI says it).
+    with pytest.warns(UserWarning, match="light: the light lights 0 of .* behind the surface"):
+        dark = iphong.relight(r["normals"], fit["albedo"], [0, 0, -1])
+    assert not dark.any()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        iphong.relight(r["normals"], fit["albedo"], [0.9, 0, -0.1])  # a rim light: nothing said

@@ -52,6 +52,19 @@ def test_scene_errors_raise_value_error_naming_the_field():
         iphong.render("no/such/scene.json")
 
 
+@pytest.mark.parametrize("name, why", [
+    ("nothing_visible.json", "every object is outside the camera's view"),
+    ("seen_from_behind.json", "every face in the camera's view is seen from behind"),
+    ("faces_of_no_area.json", "every face of the objects has no area"),
+])
+def test_a_scene_that_shows_nothing_raises_value_error_saying_why(name, why):
+    # What `iphong render` refuses (tests/cli/test_cli_bad_inputs.py), from the same library call:
+    # a blank image and an empty mask used to come back as a result.
+    scene = FIXTURES / "bad" / "scenes" / name
+    with pytest.raises(ValueError, match="nothing is visible: " + why):
+        iphong.render(scene)
+
+
 def test_cli_dataset_reads_back_like_the_in_memory_render(tmp_path):
     exe = BUILD / "iphong"
     if not exe.exists():

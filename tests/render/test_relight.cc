@@ -35,6 +35,21 @@ TEST(Relight, LitPixelsCountsWhereSomeLightReaches) {
   EXPECT_EQ(LitPixels(input).lit, right);  // the right half: N·L = x > 0
   input.lights.push_back(reflectance::Light::Directional(Vec3d(0, 0, 1), Vec3d::Ones()));
   EXPECT_EQ(LitPixels(input).lit, disc);  // each pixel counted once
+  EXPECT_EQ(LightsBehindNote(input), "");
+  input.lights = {reflectance::Light::Directional(Vec3d(0, 0, -1), Vec3d::Ones())};
+  EXPECT_EQ(LightsBehindNote(input),
+            "the light lights 0 of " + std::to_string(disc) +
+                " pixels (N.L > 0): it is behind the surface. A light direction points from the "
+                "surface toward the light (x right, y up, z toward the camera)");
+  // A light from the side, 1° behind the image plane, still lights about half the hemisphere
+  // (N·L > 0 where x > 0.0175 z): a rim light, not a mistake, and nothing is said.
+  input.lights = {reflectance::Light::Directional(Vec3d(1, 0, -0.0175), Vec3d::Ones())};
+  EXPECT_GT(LitPixels(input).lit, disc / 3);
+  EXPECT_EQ(LightsBehindNote(input), "");
+  // Normals of another shape are Validate's to refuse; nothing is counted.
+  ImageF flat(size, size, 1, 1.0f);
+  input.normals_cam = &flat;
+  EXPECT_EQ(LitPixels(input).surface, 0u);
 }
 
 }  // namespace
