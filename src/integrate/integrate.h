@@ -128,6 +128,14 @@ struct IntegrateResult {
 IntegrateResult IntegrateNormals(const ImageF& normals_cam, const Mask& mask,
                                  const IntegrateOptions& options);
 
+// The surface's shape without its pixel-level detail, at about 1/factor² of the cost: integrates
+// the block means of the normals over factor × factor blocks (a block is in the mask if any of
+// its pixels is; pixel_size × factor) and returns heights on the original grid, bilinear between
+// the blocks' centres. Orthographic, no depth prior (std::invalid_argument otherwise); factor ≤ 1
+// is IntegrateNormals. The continuity returned is all 1.
+IntegrateResult IntegrateNormalsCoarse(const ImageF& normals_cam, const Mask& mask,
+                                       const IntegrateOptions& options, int factor);
+
 // Per-pixel slopes ∂f/∂col and ∂f/∂row (f = height in pixels, or log depth) with the grazing
 // guard applied, and the cosine used for weighting. Exposed for tests and the profile integral.
 struct GridGradients {

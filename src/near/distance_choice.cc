@@ -420,7 +420,7 @@ DistanceChoice ChooseDistance(const DistanceCapture& capture, const solve::Norma
         made.normals = capture.refine(lights, by, result.distant);
         made.depth =
             IntegratedDepth(made.normals, lights, surface.frame, std::vector<double>(pixels, 0.0),
-                            o.min_cos, o.normals.threads);
+                            o.min_cos, o.normals.threads, kChoiceSurfacePixels);
         made.pass.kind = "refine";
         made.pass.change_deg = MeanChangeDeg(result.distant, made.normals, lights);
         made.pass.lights_moved_deg =

@@ -148,7 +148,7 @@ EffectiveDistanceResult ContinueEffectiveDistance(const DistanceCapture& capture
   DistanceSurface surface;  // orthographic, a pixel per unit
   const geometry::HeightMapFrame& frame = surface.frame;
   surface.depth = IntegratedDepth(result.distant, data, frame, std::vector<double>(pixels, 0.0),
-                                  o.min_cos, o.normals.threads);
+                                  o.min_cos, o.normals.threads, kChoiceSurfacePixels);
   int col0 = data.width, col1 = 0, row0 = data.height, row1 = 0;
   for (int p : data.pixels) {
     col0 = std::min(col0, p % data.width), col1 = std::max(col1, p % data.width + 1);

@@ -30,10 +30,17 @@ std::vector<Vec3d> NormalsPerPixel(const solve::NormalResult& r,
                                    const solve::PhotometricData& data);
 // The depth (per pixel of data: distance along the axis) that integrating the result's normals
 // gives, its free number from `depth`: the geometric mean under perspective, the mean otherwise.
+// With `max_pixels` > 0 (orthographic only) a mask of more pixels is integrated on blocks of 2, 4,
+// ... pixels a side, the fewest that bring it to max_pixels (integrate::IntegrateNormalsCoarse).
 std::vector<double> IntegratedDepth(const solve::NormalResult& r,
                                     const solve::PhotometricData& data,
                                     const geometry::HeightMapFrame& frame,
-                                    const std::vector<double>& depth, double min_cos, int threads);
+                                    const std::vector<double>& depth, double min_cos, int threads,
+                                    std::size_t max_pixels = 0);
+// The distance choice's surface places the pixels to move the lights they see: at 2^18 pixels it
+// is still some 512 blocks across the object, so a block is a 500th of the object, where the
+// candidate distances start at about an object size.
+constexpr std::size_t kChoiceSurfacePixels = std::size_t{1} << 18;
 // The depth scaled (perspective) or shifted (orthographic) so its mean changes by `factor`.
 std::vector<double> WithFactor(const std::vector<double>& depth, double factor, bool perspective);
 double Mean(const std::vector<double>& v);

@@ -108,7 +108,8 @@ std::vector<Vec3d> NormalsPerPixel(const solve::NormalResult& r,
 // (the geometric mean depth under perspective, the mean under an orthographic camera).
 std::vector<double> IntegratedDepth(const solve::NormalResult& r, const PhotometricData& data,
                                     const geometry::HeightMapFrame& frame,
-                                    const std::vector<double>& depth, double min_cos, int threads) {
+                                    const std::vector<double>& depth, double min_cos, int threads,
+                                    std::size_t max_pixels) {
   Mask mask(data.width, data.height, false);
   for (int p : data.pixels) mask.inside[p] = 1;
   integrate::IntegrateOptions io;
@@ -126,7 +127,12 @@ std::vector<double> IntegratedDepth(const solve::NormalResult& r, const Photomet
   } else {
     io.pixel_size = frame.pixel_size;
   }
-  const integrate::IntegrateResult ir = integrate::IntegrateNormals(r.normals, mask, io);
+  int factor = 1;
+  if (max_pixels > 0 && !frame.perspective) {
+    while (data.pixels.size() > max_pixels * factor * factor) factor *= 2;
+  }
+  const integrate::IntegrateResult ir =
+      integrate::IntegrateNormalsCoarse(r.normals, mask, io, factor);
   std::vector<double> out(data.pixel_count());
   for (std::size_t i = 0; i < out.size(); ++i) {
     const double v = ir.height.pixels[static_cast<std::size_t>(data.pixels[i])];

@@ -98,6 +98,37 @@ TEST(Integrate, SphereCapQuadraticWithinHalfPercent) {
             0.005);
 }
 
+TEST(Integrate, CoarseBlocksKeepTheShapeOnTheFineGrid) {
+  // Odd sizes, so the last blocks are partial; a silhouette crosses blocks all round.
+  const Synthetic s = MakeSynthetic(201, 181, SphereCap(100),
+                                    [](double x, double y) { return x * x + y * y < 80 * 80; });
+  const IntegrateResult fine = IntegrateNormals(s.normals, s.mask, {});
+  const IntegrateResult same = IntegrateNormalsCoarse(s.normals, s.mask, {}, 1);
+  ASSERT_EQ(same.height.pixels.size(), fine.height.pixels.size());
+  for (std::size_t p = 0; p < fine.height.pixels.size(); ++p) {
+    const float a = same.height.pixels[p], b = fine.height.pixels[p];
+    ASSERT_TRUE(a == b || (std::isnan(a) && std::isnan(b))) << p;
+  }
+  std::size_t masked = 0;
+  for (unsigned char m : s.mask.inside) masked += m;
+  for (int factor : {2, 4, 8}) {
+    SCOPED_TRACE(factor);
+    const IntegrateResult coarse = IntegrateNormalsCoarse(s.normals, s.mask, {}, factor);
+    EXPECT_EQ(coarse.summary.pixels, masked);
+    for (std::size_t p = 0; p < s.mask.inside.size(); ++p) {
+      ASSERT_EQ(std::isfinite(coarse.height.pixels[p]), s.mask.inside[p] != 0) << p;
+    }
+    // Heights stay in pixel units (a block's slope is per fine pixel: half the heights would be
+    // 14 % off); the shape within 0.4 % of the cap's height at blocks of 2 and 4 (0.14 % and
+    // 0.28 % measured), 0.8 % at 8 (0.53 %).
+    EXPECT_LT(RelativeRmse(coarse.height, s.truth, s.mask), factor <= 4 ? 0.004 : 0.008);
+  }
+  IntegrateOptions perspective;
+  perspective.perspective = true;
+  perspective.intrinsics = {200, 200, 100, 90};
+  EXPECT_THROW(IntegrateNormalsCoarse(s.normals, s.mask, perspective, 2), std::invalid_argument);
+}
+
 TEST(Integrate, BumpAndRipplesOnAnEllipse) {
   const Synthetic s = MakeSynthetic(240, 200, BumpAndRipples(), [](double x, double y) {
     return x * x / (110.0 * 110) + y * y / (80.0 * 80) < 1;
