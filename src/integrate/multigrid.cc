@@ -10,7 +10,8 @@
 namespace iphong::integrate::internal {
 
 struct GridMultigrid::Level {
-  RowMatrix a;
+  const RowMatrix* a = nullptr;  // the caller's matrix on the finest level, `own` below it
+  RowMatrix own;
   Eigen::VectorXd inverse_diagonal;
   std::vector<int> parent;  // coarse unknown of each unknown (empty on the coarsest level)
   Eigen::LDLT<Eigen::MatrixXd> direct;  // coarsest level only
@@ -84,16 +85,23 @@ void Multiply(const RowMatrix& a, const Eigen::VectorXd& x, int threads, Eigen::
 
 GridMultigrid::GridMultigrid(const RowMatrix& a, const std::vector<int>& col,
                              const std::vector<int>& row) {
-  RowMatrix current = a;
+  // The finest level reads the caller's matrix: a copy of it was the largest allocation here.
+  const RowMatrix* finest = &a;
+  RowMatrix current;
   std::vector<int> c = col, r = row;
   for (;;) {
     auto level = std::make_unique<Level>();
-    level->a = std::move(current);
-    level->inverse_diagonal = level->a.diagonal().cwiseInverse();
-    const int n = static_cast<int>(level->a.rows());
+    if (finest) {
+      level->a = finest, finest = nullptr;
+    } else {
+      level->own = std::move(current);
+      level->a = &level->own;
+    }
+    level->inverse_diagonal = level->a->diagonal().cwiseInverse();
+    const int n = static_cast<int>(level->a->rows());
     level->b.resize(n), level->x.resize(n), level->residual.resize(n);
     if (n <= kCoarsest) {
-      level->direct.compute(Eigen::MatrixXd(level->a));
+      level->direct.compute(Eigen::MatrixXd(*level->a));
       levels_.push_back(std::move(level));
       break;
     }
@@ -117,7 +125,7 @@ GridMultigrid::GridMultigrid(const RowMatrix& a, const std::vector<int>& col,
     }
     if (coarse == n) {  // nothing merges any more (isolated pixels): solve here
       level->parent.clear();
-      level->direct.compute(Eigen::MatrixXd(level->a));
+      level->direct.compute(Eigen::MatrixXd(*level->a));
       levels_.push_back(std::move(level));
       break;
     }
@@ -138,7 +146,7 @@ GridMultigrid::GridMultigrid(const RowMatrix& a, const std::vector<int>& col,
     for (int k = 0; k < coarse; ++k) {
       int count = 0;
       for (int j = child_start[k]; j < child_start[k + 1]; ++j) {
-        for (RowMatrix::InnerIterator it(level->a, children[j]); it; ++it) {
+        for (RowMatrix::InnerIterator it(*level->a, children[j]); it; ++it) {
           const int column = level->parent[it.col()];
           int slot = 0;
           while (slot < count && row_entries[slot].first != column) ++slot;
@@ -165,7 +173,7 @@ GridMultigrid::~GridMultigrid() = default;
 std::size_t GridMultigrid::memory_bytes() const {
   std::size_t bytes = 0;
   for (const auto& l : levels_) {
-    bytes += l->a.nonZeros() * (sizeof(double) + sizeof(int)) + l->a.rows() * 3 * sizeof(double) +
+    bytes += l->a->nonZeros() * (sizeof(double) + sizeof(int)) + l->a->rows() * 3 * sizeof(double) +
              l->parent.size() * sizeof(int);
   }
   return bytes;
@@ -181,15 +189,15 @@ void GridMultigrid::Cycle(std::size_t l) const {
   }
   Level& coarse = *levels_[l + 1];
   level.x.setZero();
-  ForwardGaussSeidel(level.a, level.inverse_diagonal, level.b, &level.x);
-  Residual(level.a, level.b, level.x, &level.residual);
+  ForwardGaussSeidel(*level.a, level.inverse_diagonal, level.b, &level.x);
+  Residual(*level.a, level.b, level.x, &level.residual);
   coarse.b.setZero();
   for (Eigen::Index i = 0; i < level.b.size(); ++i) coarse.b[level.parent[i]] += level.residual[i];
   Cycle(l + 1);
   for (Eigen::Index i = 0; i < level.b.size(); ++i) {
     level.x[i] += kOverCorrection * coarse.x[level.parent[i]];
   }
-  BackwardGaussSeidel(level.a, level.inverse_diagonal, level.b, &level.x);
+  BackwardGaussSeidel(*level.a, level.inverse_diagonal, level.b, &level.x);
 }
 
 void GridMultigrid::Apply(const Eigen::VectorXd& r, Eigen::VectorXd* z) const {

@@ -21,7 +21,8 @@ using RowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
 
 class GridMultigrid {
  public:
-  // `a` must be symmetric positive definite; col/row give each unknown's pixel.
+  // `a` must be symmetric positive definite and outlive the preconditioner (its finest level
+  // reads it); col/row give each unknown's pixel.
   GridMultigrid(const RowMatrix& a, const std::vector<int>& col, const std::vector<int>& row);
   ~GridMultigrid();
   // z ≈ A⁻¹ r by one V-cycle. Not for concurrent use (the levels hold the work vectors).
