@@ -73,9 +73,8 @@ std::string IntegrateOptions::Validate() const {
   return "";
 }
 
-namespace {
+namespace internal {
 
-// Returns the number of back-facing normals (an error when more than allowed).
 std::size_t CheckInputs(const ImageF& normals, const Mask& mask, const IntegrateOptions& options) {
   std::size_t back_facing = 0;
   std::string first_back_facing;
@@ -117,7 +116,7 @@ std::size_t CheckInputs(const ImageF& normals, const Mask& mask, const Integrate
   return back_facing;
 }
 
-}  // namespace
+}  // namespace internal
 
 GridGradients GradientsFromNormals(const ImageF& normals, const Mask& mask,
                                    const IntegrateOptions& options) {
@@ -173,7 +172,7 @@ IntegrateResult IntegrateNormals(const ImageF& normals_cam, const Mask& mask,
                                  const IntegrateOptions& options) {
   const auto start = Clock::now();
   if (auto m = options.Validate(); !m.empty()) throw std::invalid_argument(m);
-  const std::size_t back_facing = CheckInputs(normals_cam, mask, options);
+  const std::size_t back_facing = internal::CheckInputs(normals_cam, mask, options);
   const bool has_prior = options.depth_prior.channels == 1;
   if (has_prior &&
       (options.depth_prior.width != mask.width || options.depth_prior.height != mask.height)) {

@@ -131,8 +131,9 @@ IntegrateResult IntegrateNormals(const ImageF& normals_cam, const Mask& mask,
 // The surface's shape without its pixel-level detail, at about 1/factor² of the cost: integrates
 // the block means of the normals over factor × factor blocks (a block is in the mask if any of
 // its pixels is; pixel_size × factor) and returns heights on the original grid, bilinear between
-// the blocks' centres. Orthographic, no depth prior (std::invalid_argument otherwise); factor ≤ 1
-// is IntegrateNormals. The continuity returned is all 1.
+// the blocks' centres, with mean 0 over each part's pixels. It refuses what IntegrateNormals
+// refuses, and perspective or a depth prior (std::invalid_argument); factor ≤ 1 is
+// IntegrateNormals. The continuity returned is all 1.
 IntegrateResult IntegrateNormalsCoarse(const ImageF& normals_cam, const Mask& mask,
                                        const IntegrateOptions& options, int factor);
 

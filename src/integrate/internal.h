@@ -7,6 +7,11 @@
 
 namespace iphong::integrate::internal {
 
+// IntegrateNormals' refusals (std::invalid_argument, one line): channels, sizes, an empty mask,
+// non-finite or non-unit normals inside it, more back-facing ones than allowed. Returns the
+// number of back-facing normals.
+std::size_t CheckInputs(const ImageF& normals, const Mask& mask, const IntegrateOptions& options);
+
 // Least-squares solution f (row-major, full grid, zero mean) of the edge equations
 // f_b − f_a = (g_a + g_b)/2 over every pair of 4-neighbours of the rectangle, unit weights
 // (gradients outside the mask are 0). Natural boundary conditions (DCT-II; odd sizes through

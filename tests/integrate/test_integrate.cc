@@ -127,6 +127,28 @@ TEST(Integrate, CoarseBlocksKeepTheShapeOnTheFineGrid) {
   perspective.perspective = true;
   perspective.intrinsics = {200, 200, 100, 90};
   EXPECT_THROW(IntegrateNormalsCoarse(s.normals, s.mask, perspective, 2), std::invalid_argument);
+  // It refuses what the full integration refuses: a NaN normal inside the mask.
+  Synthetic bad = s;
+  bad.normals.at(100, 90)[0] = NAN;
+  EXPECT_THROW(IntegrateNormals(bad.normals, bad.mask, {}), std::invalid_argument);
+  EXPECT_THROW(IntegrateNormalsCoarse(bad.normals, bad.mask, {}, 2), std::invalid_argument);
+
+  // Two caps apart: each part's heights have mean 0 over its own pixels, as the full
+  // integration's do.
+  const Surface cap = SphereCap(50);
+  const Synthetic two = MakeSynthetic(
+      241, 101, [&](double x, double y) { return cap(std::abs(x) - 60, y); },
+      [](double x, double y) { return std::hypot(std::abs(x) - 60, y) < 40; });
+  const IntegrateResult parts = IntegrateNormalsCoarse(two.normals, two.mask, {}, 4);
+  double sum[2] = {0, 0}, count[2] = {0, 0};
+  for (int row = 0; row < two.mask.height; ++row) {
+    for (int col = 0; col < two.mask.width; ++col) {
+      if (!two.mask.at(col, row)) continue;
+      sum[col > 120] += *parts.height.at(col, row), ++count[col > 120];
+    }
+  }
+  EXPECT_NEAR(sum[0] / count[0], 0, 1e-4);
+  EXPECT_NEAR(sum[1] / count[1], 0, 1e-4);
 }
 
 TEST(Integrate, BumpAndRipplesOnAnEllipse) {
