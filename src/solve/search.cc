@@ -139,6 +139,7 @@ NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optiona
       near_refits_(refine_) {
   y_.resize(table.lights());
   usable_.resize(table.lights());
+  zero_row_.assign(table.lights(), 0.0f);
   lit_.reserve(table.lights());
   keep_ = std::max(refine_, kCoarseTop);
   scores_.reserve(keep_);
@@ -175,15 +176,30 @@ void NormalSearch::PackNear(std::size_t groups) {
     if (g < static_cast<std::size_t>(near_coarse_)) near_scored_ = near_.size();
   }
   const std::size_t blocks = (near_.size() + W - 1) / W;
-  near_diffuse_.assign(blocks * k * W, 0.0f);
-  near_specular_.assign(blocks * k * W, 0.0f);
-  for (std::size_t i = 0; i < near_.size(); ++i) {
-    const float *d = table_.diffuse(near_[i]), *s = table_.specular(near_[i]);
-    const std::size_t at = (i / W) * k * W + i % W;
-    for (std::size_t j = 0; j < k; ++j) {
-      near_diffuse_[at + j * W] = d[j];
-      near_specular_[at + j * W] = s[j];
-    }
+  near_diffuse_.resize(blocks * k * W);
+  near_specular_.resize(blocks * k * W);
+  for (std::size_t b = 0; b < blocks; ++b) {
+    const std::size_t count = std::min(W, near_.size() - b * W);
+    PackBlock(near_.data() + b * W, count, near_diffuse_.data() + b * k * W,
+              near_specular_.data() + b * k * W);
+  }
+}
+
+void NormalSearch::PackBlock(const int* candidates, std::size_t count, float* diffuse,
+                             float* specular) {
+  constexpr std::size_t W = kSearchLanes;
+  const std::size_t k = table_.lights();
+  // Every lane written light by light, W contiguous floats at a time (lanes past `count` from a
+  // row of zeros: an empty candidate): a fill of the buffer first and strided stores after it
+  // cost more than the arithmetic that reads the block.
+  const float *d[W], *s[W];
+  for (std::size_t i = 0; i < W; ++i) {
+    d[i] = i < count ? table_.diffuse(candidates[i]) : zero_row_.data();
+    s[i] = i < count ? table_.specular(candidates[i]) : zero_row_.data();
+  }
+  for (std::size_t j = 0; j < k; ++j) {
+    for (std::size_t i = 0; i < W; ++i) diffuse[j * W + i] = d[i][j];
+    for (std::size_t i = 0; i < W; ++i) specular[j * W + i] = s[i][j];
   }
 }
 
@@ -253,18 +269,16 @@ void NormalSearch::RefitBlock(const int* which, int count, double t, const doubl
   using Wide = WideLanes;
   const std::size_t k = table_.lights();
   // The candidates' factors packed as a block (lanes past `count` zero: nothing fits there).
-  refit_diffuse_.assign(k * W, 0.0f);
-  refit_specular_.assign(k * W, 0.0f);
+  refit_diffuse_.resize(k * W);
+  refit_specular_.resize(k * W);
   Wide kd0 = Wide::Zero(), ks0 = Wide::Zero();
+  int candidates[W];
   for (int i = 0; i < count; ++i) {
     const Scored& s = scores_[which[i]];
-    const float *d = table_.diffuse(s.candidate), *sp = table_.specular(s.candidate);
-    for (std::size_t j = 0; j < k; ++j) {
-      refit_diffuse_[j * W + i] = d[j];
-      refit_specular_[j * W + i] = sp[j];
-    }
+    candidates[i] = s.candidate;
     kd0[i] = s.kd, ks0[i] = s.ks;
   }
+  PackBlock(candidates, count, refit_diffuse_.data(), refit_specular_.data());
   const float* diffuse = refit_diffuse_.data();
   const float* specular = refit_specular_.data();
   const float floor = static_cast<float>(-t);
@@ -277,7 +291,8 @@ void NormalSearch::RefitBlock(const int* which, int count, double t, const doubl
     SolveLanes(sums.col(0).cast<double>(), sums.col(1).cast<double>(), sums.col(2).cast<double>(),
                sums.col(3).cast<double>(), sums.col(4).cast<double>(), fixed_ks, kd, ks);
   };
-  refit_weights_.assign(k * W, 0.0f);
+  // Round 0 writes every usable light's weights before round 1 compares with them: no fill.
+  refit_weights_.resize(k * W);
   // Round 0: the screening fit's weights, and the fit they give.
   Sums first, second;
   Lanes cost1, changed;

@@ -179,6 +179,8 @@ class NormalSearch {
   // many of them belong to the first near_coarse_: the same few are scored by every search near
   // the last full one (a pixel's held-out folds, both models).
   void PackNear(std::size_t groups);
+  // Packs `count` (≤ kSearchLanes) candidates' factors as one block, light-major (k × lanes).
+  void PackBlock(const int* candidates, std::size_t count, float* diffuse, float* specular);
   const CandidateTable& table_;
   int refine_;
   std::optional<double> ks_prior_;
@@ -237,10 +239,11 @@ class NormalSearch {
   std::vector<float> near_diffuse_, near_specular_;
   std::vector<int> refit_;  // the scores_ to refit
   std::vector<float> refit_diffuse_, refit_specular_, refit_weights_;
-  std::vector<int> excluded_;  // lights of the sums' base that the search leaves out
-  std::vector<int> lit_;       // the usable lights
-  int base_ = -1;              // the sums' base (CandidateTable::base_sums)
-  bool from_table_ = true;     // sums from the base less excluded_, else summed directly
+  std::vector<float> zero_row_;  // k zeros: a padding lane's factors
+  std::vector<int> excluded_;    // lights of the sums' base that the search leaves out
+  std::vector<int> lit_;         // the usable lights
+  int base_ = -1;                // the sums' base (CandidateTable::base_sums)
+  bool from_table_ = true;       // sums from the base less excluded_, else summed directly
   std::vector<int> fold_unusable_;
 };
 
