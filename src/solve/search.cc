@@ -139,7 +139,7 @@ NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optiona
       near_refits_(refine_) {
   y_.resize(table.lights());
   usable_.resize(table.lights());
-  zero_row_.assign(table.lights(), 0.0f);
+  zero_row_.assign(static_cast<std::size_t>(table.lights()) * kSearchLanes, 0.0f);
   lit_.reserve(table.lights());
   keep_ = std::max(refine_, kCoarseTop);
   scores_.reserve(keep_);
@@ -161,7 +161,7 @@ void NormalSearch::ScoreRange(int begin, int end, double t, const double* fixed_
     const int offset = first - block * kSearchLanes;
     for (int i = 0; i < kSearchLanes; ++i) lanes[i] = i < offset ? -1 : block * kSearchLanes + i;
     ScoreBlock(table_.diffuse_block(block), table_.specular_block(block), table_.sums_block(block),
-               lanes, last - block * kSearchLanes, t, fixed_ks);
+               lanes, last - block * kSearchLanes, false, t, fixed_ks);
   }
 }
 
@@ -189,22 +189,21 @@ void NormalSearch::PackBlock(const int* candidates, std::size_t count, float* di
                              float* specular) {
   constexpr std::size_t W = kSearchLanes;
   const std::size_t k = table_.lights();
-  // Every lane written light by light, W contiguous floats at a time (lanes past `count` from a
-  // row of zeros: an empty candidate): a fill of the buffer first and strided stores after it
-  // cost more than the arithmetic that reads the block.
+  // Every lane written, eight lights at a time by a transpose in registers (lanes past `count`
+  // from a row of zeros: an empty candidate): a fill of the buffer first and strided stores
+  // after it cost more than the arithmetic that reads the block.
   const float *d[W], *s[W];
   for (std::size_t i = 0; i < W; ++i) {
     d[i] = i < count ? table_.diffuse(candidates[i]) : zero_row_.data();
     s[i] = i < count ? table_.specular(candidates[i]) : zero_row_.data();
   }
-  for (std::size_t j = 0; j < k; ++j) {
-    for (std::size_t i = 0; i < W; ++i) diffuse[j * W + i] = d[i][j];
-    for (std::size_t i = 0; i < W; ++i) specular[j * W + i] = s[i][j];
-  }
+  internal::SearchLaneKernels().pack(d, static_cast<int>(k), diffuse);
+  internal::SearchLaneKernels().pack(s, static_cast<int>(k), specular);
 }
 
 void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const double* sums,
-                              const int* candidates, int count, double t, const double* fixed_ks) {
+                              const int* candidates, int count, bool near, double t,
+                              const double* fixed_ks) {
   constexpr int W = kSearchLanes;
   // Σ d², Σ d s, Σ s² (double, the 2 × 2 system's): a regular block's over every light come
   // packed with it; otherwise gathered from the table's base, or summed over the usable lights
@@ -259,6 +258,9 @@ void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const
       into->kd = score.kd[i];
       into->ks = score.ks[i];
       into->censors = score.clipped[i] > 0;
+      into->near = near;
+      into->at =
+          static_cast<int>(diffuse - (near ? near_diffuse_.data() : table_.diffuse_block(0))) + i;
     }
   }
 }
@@ -271,14 +273,24 @@ void NormalSearch::RefitBlock(const int* which, int count, double t, const doubl
   // The candidates' factors packed as a block (lanes past `count` zero: nothing fits there).
   refit_diffuse_.resize(k * W);
   refit_specular_.resize(k * W);
+  // Gathered from the blocks the candidates were just scored in, which are in cache, rather than
+  // from the table's rows (a padding lane from zeros).
   Wide kd0 = Wide::Zero(), ks0 = Wide::Zero();
-  int candidates[W];
-  for (int i = 0; i < count; ++i) {
+  const float *d_from[W], *s_from[W];
+  for (int i = 0; i < W; ++i) {
+    if (i >= count) {
+      d_from[i] = s_from[i] = zero_row_.data();
+      continue;
+    }
     const Scored& s = scores_[which[i]];
-    candidates[i] = s.candidate;
+    d_from[i] = (s.near ? near_diffuse_.data() : table_.diffuse_block(0)) + s.at;
+    s_from[i] = (s.near ? near_specular_.data() : table_.specular_block(0)) + s.at;
     kd0[i] = s.kd, ks0[i] = s.ks;
   }
-  PackBlock(candidates, count, refit_diffuse_.data(), refit_specular_.data());
+  for (std::size_t j = 0; j < k; ++j) {
+    for (int i = 0; i < W; ++i) refit_diffuse_[j * W + i] = d_from[i][j * W];
+    for (int i = 0; i < W; ++i) refit_specular_[j * W + i] = s_from[i][j * W];
+  }
   const float* diffuse = refit_diffuse_.data();
   const float* specular = refit_specular_.data();
   const float floor = static_cast<float>(-t);
@@ -419,7 +431,8 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
   for (std::size_t i = 0; i < scored; i += kSearchLanes) {
     ScoreBlock(near_diffuse_.data() + (i / kSearchLanes) * block,
                near_specular_.data() + (i / kSearchLanes) * block, nullptr, near_.data() + i,
-               static_cast<int>(std::min<std::size_t>(kSearchLanes, scored - i)), t, fixed_ks);
+               static_cast<int>(std::min<std::size_t>(kSearchLanes, scored - i)), true, t,
+               fixed_ks);
   }
   const int top =
       std::min<int>(near_last ? near_refits_ : refine_, static_cast<int>(scores_.size()));

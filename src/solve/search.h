@@ -162,9 +162,10 @@ class NormalSearch {
   void ScoreRange(int begin, int end, double t, const double* fixed_ks);
   // Scores the candidates of one packed block (K × kSearchLanes factors, and with `sums` their
   // sums over every light packed as CandidateTable::sums_block gives them, else nullptr), lane i
-  // holding candidate candidates[i] for i < count.
+  // holding candidate candidates[i] for i < count; `near`: a block of near_diffuse_, else the
+  // table's.
   void ScoreBlock(const float* diffuse, const float* specular, const double* sums,
-                  const int* candidates, int count, double t, const double* fixed_ks);
+                  const int* candidates, int count, bool near, double t, const double* fixed_ks);
   // The 2 × 2 solve's settings: the ks prior (none: NonNegativePair's defaults) and the ridge.
   internal::PairSettings pair_settings(const double* fixed_ks) const {
     return {ks_prior_ ? prior_weight_ : 0.0, ks_prior_ ? *ks_prior_ : 0.0, internal::kKsRidge,
@@ -189,8 +190,10 @@ class NormalSearch {
   struct Scored {
     double cost;
     int candidate;
+    int at;  // its first factor in the packed block it was scored in (lights kSearchLanes apart)
     double kd, ks;  // the least-squares coefficients the cost was taken at
     bool censors;   // whether any usable observation lies more than t below that fit
+    bool near;      // scored in near_diffuse_/near_specular_, else in the table's blocks
     bool operator<(const Scored& o) const { return cost < o.cost; }
   };
   // The best candidates scored so far, at most keep_ (refine_, and the coarse step's 12), and a
@@ -239,7 +242,7 @@ class NormalSearch {
   std::vector<float> near_diffuse_, near_specular_;
   std::vector<int> refit_;  // the scores_ to refit
   std::vector<float> refit_diffuse_, refit_specular_, refit_weights_;
-  std::vector<float> zero_row_;  // k zeros: a padding lane's factors
+  std::vector<float> zero_row_;  // k·kSearchLanes zeros: a padding lane's factors
   std::vector<int> excluded_;    // lights of the sums' base that the search leaves out
   std::vector<int> lit_;         // the usable lights
   int base_ = -1;                // the sums' base (CandidateTable::base_sums)

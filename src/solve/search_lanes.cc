@@ -1,6 +1,7 @@
 #include "solve/search_lanes.h"
 
 #include <cstring>
+#include <initializer_list>
 
 // The bodies are inlined into one function per instruction set, which compiles them for it.
 #define IPHONG_LANE_BODY static inline __attribute__((always_inline))
@@ -164,6 +165,34 @@ IPHONG_LANE_BODY void PairBody(const double* sums, double prior_weight, double p
   }
 }
 
+// LaneKernels::pack: eight lights at a time as an 8 × 8 transpose in registers (three rounds of
+// two-vector shuffles: pairs of 1, 2 and 4 lanes), the rest one by one.
+IPHONG_LANE_BODY void PackBody(const float* const* rows, int k, float* out) {
+  static_assert(kLanes == 8, "the transpose is 8 × 8");
+  typedef int Index __attribute__((vector_size(kLanes * sizeof(int))));
+  int j = 0;
+  for (; j + kLanes <= k; j += kLanes) {
+    Lanes r[kLanes], t[kLanes];
+    for (int i = 0; i < kLanes; ++i) Load(&r[i], rows[i] + j);
+    for (int i = 0; i < kLanes; i += 2) {
+      t[i] = __builtin_shuffle(r[i], r[i + 1], Index{0, 8, 2, 10, 4, 12, 6, 14});
+      t[i + 1] = __builtin_shuffle(r[i], r[i + 1], Index{1, 9, 3, 11, 5, 13, 7, 15});
+    }
+    for (const int i : {0, 1, 4, 5}) {
+      r[i] = __builtin_shuffle(t[i], t[i + 2], Index{0, 1, 8, 9, 4, 5, 12, 13});
+      r[i + 2] = __builtin_shuffle(t[i], t[i + 2], Index{2, 3, 10, 11, 6, 7, 14, 15});
+    }
+    for (int i = 0; i < 4; ++i) {
+      t[i] = __builtin_shuffle(r[i], r[i + 4], Index{0, 1, 2, 3, 8, 9, 10, 11});
+      t[i + 4] = __builtin_shuffle(r[i], r[i + 4], Index{4, 5, 6, 7, 12, 13, 14, 15});
+    }
+    for (int i = 0; i < kLanes; ++i) Store(out + (j + i) * kLanes, t[i]);
+  }
+  for (; j < k; ++j) {
+    for (int i = 0; i < kLanes; ++i) out[j * kLanes + i] = rows[i][j];
+  }
+}
+
 // The screening of one block (LaneKernels::score): the bodies above in sequence, with the sums in
 // double N lanes at a time, each term as the scalar search computed it (d² as double(d)·double(d),
 // an excluded light's subtracted as a sum of its negated term).
@@ -245,7 +274,12 @@ void ScoreBaseline(const float* diffuse, const float* specular, bool lobe, const
   ScoreBody<2>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor, out);
 }
 
+void PackBaseline(const float* const* rows, int k, float* out) { PackBody(rows, k, out); }
+
 #if IPHONG_LANES_AVX2
+__attribute__((target("avx2"))) void PackAvx2(const float* const* rows, int k, float* out) {
+  PackBody(rows, k, out);
+}
 __attribute__((target("avx2"))) void ProductAvx2(const float* diffuse, const float* specular,
                                                  bool lobe, const int* lit, int n, const float* y,
                                                  float* a, float* b) {
@@ -282,14 +316,15 @@ __attribute__((target("avx2"))) void ScoreAvx2(const float* diffuse, const float
 
 const LaneKernels& BaselineLaneKernels() {
   static const LaneKernels kernels{"baseline",           ProductBaseline, CostBaseline,
-                                   WeightedSumsBaseline, PairBaseline,    ScoreBaseline};
+                                   WeightedSumsBaseline, PairBaseline,    ScoreBaseline,
+                                   PackBaseline};
   return kernels;
 }
 
 const LaneKernels* Avx2LaneKernels() {
 #if IPHONG_LANES_AVX2
-  static const LaneKernels kernels{"avx2",           ProductAvx2, CostAvx2,
-                                   WeightedSumsAvx2, PairAvx2,    ScoreAvx2};
+  static const LaneKernels kernels{"avx2",   ProductAvx2, CostAvx2, WeightedSumsAvx2,
+                                   PairAvx2, ScoreAvx2,   PackAvx2};
   static const bool available = __builtin_cpu_supports("avx2");
   return available ? &kernels : nullptr;
 #else

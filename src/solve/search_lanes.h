@@ -61,6 +61,8 @@ struct LaneKernels {
   void (*score)(const float* diffuse, const float* specular, bool lobe, const int* lit, int n,
                 const float* y, const double* base, const int* excluded, int n_excluded,
                 const PairSettings& pair, float floor, BlockScore* out);
+  // A block packed from kLanes rows of k floats each: out[j·kLanes + i] = rows[i][j] (a copy).
+  void (*pack)(const float* const* rows, int k, float* out);
 };
 
 // The baseline's kernels, AVX2's (nullptr off x86-64 or where the processor lacks AVX2), and the

@@ -149,6 +149,28 @@ TEST(Normals, LaneKernelsEqualAPlainLoopBitwise) {
   RecordProperty("variants", static_cast<int>(variants.size()));
 }
 
+// The packing kernel (LaneKernels::pack) is a transpose: out[j·W + i] = rows[i][j], for light
+// counts with and without a whole number of 8-light steps, rows apart in memory.
+TEST(Normals, PackedBlocksAreTheRowsTransposed) {
+  constexpr int W = internal::kLanes;
+  std::vector<const internal::LaneKernels*> variants = {&internal::BaselineLaneKernels()};
+  if (internal::Avx2LaneKernels()) variants.push_back(internal::Avx2LaneKernels());
+  for (const int k : {3, 8, 19, 96}) {
+    std::vector<float> table(W * (k + 5));
+    for (std::size_t e = 0; e < table.size(); ++e) table[e] = 0.25f * e + 1;
+    const float* rows[W];
+    for (int i = 0; i < W; ++i) rows[i] = table.data() + ((5 * i) % W) * (k + 5) + i % 3;
+    for (const internal::LaneKernels* v : variants) {
+      std::vector<float> out(k * W, -1.0f);
+      v->pack(rows, k, out.data());
+      int wrong = 0;
+      for (int j = 0; j < k; ++j)
+        for (int i = 0; i < W; ++i) wrong += out[j * W + i] != rows[i][j];
+      EXPECT_EQ(wrong, 0) << v->name << ", " << k << " lights";
+    }
+  }
+}
+
 // The fused screening kernel (LaneKernels::score) against the search's steps done one by one
 // with scalar code: Σ y d and Σ y s in float, Σ d², Σ d s, Σ s² in double — from a base less the
 // excluded lights' terms, or over the lit lights — internal::NonNegativePair, then the censored
