@@ -189,9 +189,8 @@ void NormalSearch::PackBlock(const int* candidates, std::size_t count, float* di
                              float* specular) {
   constexpr std::size_t W = kSearchLanes;
   const std::size_t k = table_.lights();
-  // Every lane written, eight lights at a time by a transpose in registers (lanes past `count`
-  // from a row of zeros: an empty candidate): a fill of the buffer first and strided stores
-  // after it cost more than the arithmetic that reads the block.
+  // Every lane written, eight lights at a time by a transpose in registers, lanes past `count`
+  // from a row of zeros (an empty candidate): no fill of the buffer first, no strided stores.
   const float *d[W], *s[W];
   for (std::size_t i = 0; i < W; ++i) {
     d[i] = i < count ? table_.diffuse(candidates[i]) : zero_row_.data();
