@@ -151,17 +151,34 @@ NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optiona
 }
 
 void NormalSearch::ScoreRange(int begin, int end, double t, const double* fixed_ks) {
-  int lanes[kSearchLanes];
+  int lanes[4][kSearchLanes];
+  const float* diffuse[4];
+  const float* specular[4];
+  const double* sums[4];
+  const int* candidates[4] = {lanes[0], lanes[1], lanes[2], lanes[3]};
+  int count[4];
   // From the last block down: the spiral's directions rise toward the camera with their index,
   // and most surfaces face it, so the best few are met early and the kept set seldom changes.
-  for (int block = (end - 1) / kSearchLanes; block >= begin / kSearchLanes; --block) {
-    const int first = std::max(begin, block * kSearchLanes);
-    const int last = std::min(end, (block + 1) * kSearchLanes);
-    // Lanes before `first` hold candidates outside the range: scored, not reported.
-    const int offset = first - block * kSearchLanes;
-    for (int i = 0; i < kSearchLanes; ++i) lanes[i] = i < offset ? -1 : block * kSearchLanes + i;
-    ScoreBlock(table_.diffuse_block(block), table_.specular_block(block), table_.sums_block(block),
-               lanes, last - block * kSearchLanes, false, t, fixed_ks);
+  // Four blocks a call, the last few two or one (their results kept in the blocks' order, as
+  // one at a time would keep them).
+  const int low = begin / kSearchLanes;
+  int n = 1;
+  for (int block = (end - 1) / kSearchLanes; block >= low; block -= n) {
+    const int remaining = block - low + 1;
+    n = remaining >= 4 ? 4 : remaining >= 2 ? 2 : 1;
+    for (int q = 0; q < n; ++q) {
+      const int at = block - q;
+      const int first = std::max(begin, at * kSearchLanes);
+      const int last = std::min(end, (at + 1) * kSearchLanes);
+      // Lanes before `first` hold candidates outside the range: scored, not reported.
+      const int offset = first - at * kSearchLanes;
+      for (int i = 0; i < kSearchLanes; ++i) lanes[q][i] = i < offset ? -1 : at * kSearchLanes + i;
+      diffuse[q] = table_.diffuse_block(at);
+      specular[q] = table_.specular_block(at);
+      sums[q] = table_.sums_block(at);
+      count[q] = last - at * kSearchLanes;
+    }
+    ScoreBlocks(n, diffuse, specular, sums, candidates, count, false, t, fixed_ks);
   }
 }
 
@@ -200,33 +217,69 @@ void NormalSearch::PackBlock(const int* candidates, std::size_t count, float* di
   internal::SearchLaneKernels().pack(s, static_cast<int>(k), specular);
 }
 
-void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const double* sums,
-                              const int* candidates, int count, bool near, double t,
-                              const double* fixed_ks) {
+void NormalSearch::ScoreBlocks(int blocks, const float* const* diffuse,
+                               const float* const* specular, const double* const* sums,
+                               const int* const* candidates, const int* count, bool near, double t,
+                               const double* fixed_ks) {
   constexpr int W = kSearchLanes;
   // Σ d², Σ d s, Σ s² (double, the 2 × 2 system's): a regular block's over every light come
   // packed with it; otherwise gathered from the table's base, or summed over the usable lights
   // (the kernel does that when given none).
-  const double* base = nullptr;
-  if (from_table_) {
-    if (sums && base_ < 0) {
-      base = sums;
-    } else {
-      for (int i = 0; i < W; ++i) {
-        const bool in = i < count && candidates[i] >= 0;
-        const double* c = in ? table_.base_sums(base_, candidates[i]) : nullptr;
-        for (int m = 0; m < 3; ++m) gathered_[m * W + i] = in ? c[m] : 0.0;
-      }
-      base = gathered_;
+  const double* base[4] = {nullptr, nullptr, nullptr, nullptr};
+  for (int q = 0; q < blocks && from_table_; ++q) {
+    if (sums[q] && base_ < 0) {
+      base[q] = sums[q];
+      continue;
     }
+    for (int i = 0; i < W; ++i) {
+      const bool in = i < count[q] && candidates[q][i] >= 0;
+      const double* c = in ? table_.base_sums(base_, candidates[q][i]) : nullptr;
+      for (int m = 0; m < 3; ++m) gathered_[q][m * W + i] = in ? c[m] : 0.0;
+    }
+    base[q] = gathered_[q];
   }
   // Then the least-squares pair and the censored cost Σ_j max(y_j − kd d_j − ks s_j, −t)² over
   // the usable lights, and by how much the censoring clips (positive where it censors anything).
-  internal::BlockScore& score = block_score_;
-  internal::SearchLaneKernels().score(diffuse, specular, table_.has_lobe(), lit_.data(),
-                                      static_cast<int>(lit_.size()), y_.data(), base,
-                                      excluded_.data(), static_cast<int>(excluded_.size()),
-                                      pair_settings(fixed_ks), static_cast<float>(-t), &score);
+  const internal::LaneKernels& kernels = internal::SearchLaneKernels();
+  if (blocks > 1) {
+    (blocks == 4 ? kernels.score4 : kernels.score2)(
+        diffuse, specular, table_.has_lobe(), lit_.data(), static_cast<int>(lit_.size()), y_.data(),
+        base, excluded_.data(), static_cast<int>(excluded_.size()), pair_settings(fixed_ks),
+        static_cast<float>(-t), block_score_);
+  } else {
+    kernels.score(diffuse[0], specular[0], table_.has_lobe(), lit_.data(),
+                  static_cast<int>(lit_.size()), y_.data(), base[0], excluded_.data(),
+                  static_cast<int>(excluded_.size()), pair_settings(fixed_ks),
+                  static_cast<float>(-t), block_score_);
+  }
+  for (int q = 0; q < blocks; ++q) {
+    Keep(block_score_[q], diffuse[q], candidates[q], count[q], near);
+  }
+}
+
+void NormalSearch::Keep(const internal::BlockScore& score, const float* diffuse,
+                        const int* candidates, int count, bool near) {
+  constexpr int W = kSearchLanes;
+  const auto record = [&](Scored* into, int i) {
+    // Field by field: an entry built aside and copied whole is read back before its parts have
+    // been stored.
+    into->cost = score.cost[i];
+    into->candidate = candidates[i];
+    into->kd = score.kd[i];
+    into->ks = score.ks[i];
+    into->censors = score.clipped[i] > 0;
+    into->near = near;
+    into->at =
+        static_cast<int>(diffuse - (near ? near_diffuse_.data() : table_.diffuse_block(0))) + i;
+  };
+  // A search that scores no more than it keeps keeps them all, in the order scored: the heap
+  // would have taken each as it came.
+  if (keep_all_) {
+    for (int i = 0; i < count; ++i) {
+      if (candidates[i] >= 0) record(&scores_.emplace_back(), i);
+    }
+    return;
+  }
   // Only the best `keep_` scored so far are kept (no candidate past them can reach the refits or
   // the coarse step's 12), in a heap with the worst on top.
   if (static_cast<int>(scores_.size()) >= keep_) {
@@ -249,18 +302,7 @@ void NormalSearch::ScoreBlock(const float* diffuse, const float* specular, const
       heap_.back() = MakeSlot(cost, heap_.back().slot);
       std::push_heap(heap_.begin(), heap_.end());
     }
-    if (into) {
-      // Field by field: an entry built aside and copied whole is read back before its parts
-      // have been stored.
-      into->cost = cost;
-      into->candidate = candidates[i];
-      into->kd = score.kd[i];
-      into->ks = score.ks[i];
-      into->censors = score.clipped[i] > 0;
-      into->near = near;
-      into->at =
-          static_cast<int>(diffuse - (near ? near_diffuse_.data() : table_.diffuse_block(0))) + i;
-    }
+    if (into) record(into, i);
   }
 }
 
@@ -409,6 +451,7 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
   }
   scores_.clear();
   heap_.clear();
+  keep_all_ = false;
   if (!near_last) {
     ScoreRange(table_.fine_count(), table_.size(), t, fixed_ks);
     const int coarse_top = std::min<int>(kCoarseTop, static_cast<int>(scores_.size()));
@@ -426,22 +469,38 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
   // that finds none packed (its own table's, NearTheLastOf) packs only those it scores.
   if (near_.empty()) PackNear(near_last ? near_coarse_ : last_coarse_.size());
   const std::size_t scored = near_last ? near_scored_ : near_.size();
+  keep_all_ = near_last && scored <= static_cast<std::size_t>(keep_);
   const std::size_t block = static_cast<std::size_t>(k) * kSearchLanes;
-  for (std::size_t i = 0; i < scored; i += kSearchLanes) {
-    ScoreBlock(near_diffuse_.data() + (i / kSearchLanes) * block,
-               near_specular_.data() + (i / kSearchLanes) * block, nullptr, near_.data() + i,
-               static_cast<int>(std::min<std::size_t>(kSearchLanes, scored - i)), true, t,
-               fixed_ks);
+  const float* diffuse[2];
+  const float* specular[2];
+  const double* const sums[2] = {nullptr, nullptr};
+  const int* candidates[2];
+  int count[2];
+  for (std::size_t i = 0; i < scored; i += 2 * kSearchLanes) {
+    const int n = scored - i > kSearchLanes ? 2 : 1;
+    for (int q = 0; q < n; ++q) {
+      const std::size_t at = i + q * kSearchLanes;
+      diffuse[q] = near_diffuse_.data() + (at / kSearchLanes) * block;
+      specular[q] = near_specular_.data() + (at / kSearchLanes) * block;
+      candidates[q] = near_.data() + at;
+      count[q] = static_cast<int>(std::min<std::size_t>(kSearchLanes, scored - at));
+    }
+    ScoreBlocks(n, diffuse, specular, sums, candidates, count, true, t, fixed_ks);
   }
   const int top =
       std::min<int>(near_last ? near_refits_ : refine_, static_cast<int>(scores_.size()));
-  RefitAndOrder(top, t, fixed_ks);
   SearchResult best;
+  // A held-out fold's search (near_last) is read for its winner alone.
+  if (near_last) {
+    const int winner = RefitWinner(top, t, fixed_ks);
+    if (winner < 0) return best;
+    const Scored& first = scores_[winner];
+    return {first.candidate, first.cost, first.kd, first.ks, {-1, -1}};
+  }
+  RefitAndOrder(top, t, fixed_ks);
   if (top == 0) return best;
   const Scored& first = scores_[order_[0]];
   best = {first.candidate, first.cost, first.kd, first.ks, {-1, -1}};
-  // A held-out fold's search (near_last) is read for its winner alone.
-  if (near_last) return best;
   const double apart = std::cos(kOtherBasinDeg * M_PI / 180);
   std::size_t found = 0;
   for (int i = 1; i < top && found < best.others.size(); ++i) {
@@ -452,6 +511,71 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
     if (distinct) best.others[found++] = scores_[order_[i]].candidate;
   }
   return best;
+}
+
+int NormalSearch::RefitWinner(int top, double t, const double* fixed_ks) {
+  const int n = static_cast<int>(scores_.size());
+  if (top <= 0) return -1;
+  // RefitAndOrder's order_[0] without ordering the rest: the best `top` by (screening cost,
+  // position) picked one at a time, the censoring ones refitted, and the least refitted cost
+  // wins, ties to the better screening rank. Beyond 16 entries or with a NaN screening cost,
+  // RefitAndOrder itself.
+  constexpr int kMost = 16;
+  bool counted = n <= kMost;
+  for (int i = 0; i < n && counted; ++i) counted = !std::isnan(static_cast<float>(scores_[i].cost));
+  if (!counted) {
+    RefitAndOrder(top, t, fixed_ks);
+    return order_[0];
+  }
+  // Each entry's (cost, position) as one unsigned key, ordered as the pair is (the float's bits
+  // made monotone; +0 for −0, which compares equal to it), so the picks need no branches.
+  std::uint64_t key[kMost];
+  for (int i = 0; i < n; ++i) {
+    std::uint32_t bits;
+    const float c = static_cast<float>(scores_[i].cost) + 0.0f;
+    std::memcpy(&bits, &c, sizeof bits);
+    bits ^= (bits >> 31) != 0 ? 0xffffffffu : 0x80000000u;
+    key[i] = (static_cast<std::uint64_t>(bits) << 32) | static_cast<std::uint32_t>(i);
+  }
+  constexpr std::uint64_t kTaken = ~std::uint64_t{0};
+  bool taken[kMost] = {};
+  int chosen[kMost];  // chosen[r]: the entry of screening rank r
+  for (int r = 0; r < top; ++r) {
+    std::uint64_t least = kTaken;
+    for (int i = 0; i < n; ++i) least = std::min(least, key[i]);
+    chosen[r] = static_cast<int>(least & 0xffffffffu);
+    key[chosen[r]] = kTaken;
+    taken[chosen[r]] = true;
+  }
+  refit_.resize(n);
+  int refits = 0;
+  for (int i = 0; i < n; ++i) {
+    refit_[refits] = i;
+    refits += taken[i] & scores_[i].censors;
+  }
+  for (int i = 0; i < refits; i += kSearchLanes) {
+    RefitBlock(refit_.data() + i, std::min(kSearchLanes, refits - i), t, fixed_ks);
+  }
+  bool nan = false;
+  for (int r = 0; r < top; ++r)
+    nan = nan || std::isnan(static_cast<float>(scores_[chosen[r]].cost));
+  if (nan) {
+    // As RefitAndOrder orders a NaN: by insertion in screening order, on the costs themselves.
+    for (int i = 1; i < top; ++i) {
+      for (int j = i; j > 0 && scores_[chosen[j]].cost < scores_[chosen[j - 1]].cost; --j)
+        std::swap(chosen[j], chosen[j - 1]);
+    }
+    return chosen[0];
+  }
+  int winner = chosen[0];
+  float least = static_cast<float>(scores_[winner].cost);
+  for (int r = 1; r < top; ++r) {
+    const float c = static_cast<float>(scores_[chosen[r]].cost);
+    const bool better = c < least;
+    winner = better ? chosen[r] : winner;
+    least = better ? c : least;
+  }
+  return winner;
 }
 
 void NormalSearch::RefitAndOrder(int top, double t, const double* fixed_ks) {

@@ -160,12 +160,16 @@ class NormalSearch {
   // Scores candidates [begin, end) — the least-squares coefficients on the usable lights and the
   // censored cost there — and appends them to scores_, a packed block at a time.
   void ScoreRange(int begin, int end, double t, const double* fixed_ks);
-  // Scores the candidates of one packed block (K × kSearchLanes factors, and with `sums` their
+  // Scores `blocks` (1 or 2) packed blocks (K × kSearchLanes factors each, and with sums[q] their
   // sums over every light packed as CandidateTable::sums_block gives them, else nullptr), lane i
-  // holding candidate candidates[i] for i < count; `near`: a block of near_diffuse_, else the
-  // table's.
-  void ScoreBlock(const float* diffuse, const float* specular, const double* sums,
-                  const int* candidates, int count, bool near, double t, const double* fixed_ks);
+  // of block q holding candidate candidates[q][i] for i < count[q]; `near`: blocks of
+  // near_diffuse_, else the table's. The blocks' results are kept (Keep) in their order.
+  void ScoreBlocks(int blocks, const float* const* diffuse, const float* const* specular,
+                   const double* const* sums, const int* const* candidates, const int* count,
+                   bool near, double t, const double* fixed_ks);
+  // Keeps a scored block's candidates among the best keep_ (scores_ and heap_).
+  void Keep(const internal::BlockScore& score, const float* diffuse, const int* candidates,
+            int count, bool near);
   // The 2 × 2 solve's settings: the ks prior (none: NonNegativePair's defaults) and the ridge.
   internal::PairSettings pair_settings(const double* fixed_ks) const {
     return {ks_prior_ ? prior_weight_ : 0.0, ks_prior_ ? *ks_prior_ : 0.0, internal::kKsRidge,
@@ -227,14 +231,18 @@ class NormalSearch {
   // Refits the best `top` of the scored (in screening order) and leaves order_[0 … top) the
   // indices of scores_ by refitted cost, ties in screening order.
   void RefitAndOrder(int top, double t, const double* fixed_ks);
+  // The same refits, and the index in scores_ of what would be order_[0] (−1 when top is 0):
+  // all a near_last search reads.
+  int RefitWinner(int top, double t, const double* fixed_ks);
   std::vector<float> costs_;
   std::vector<Scored> sorted_;
   std::vector<int> rank_, order_;
-  double gathered_[3 * kSearchLanes];  // a block's sums gathered from the table
-  internal::BlockScore block_score_;
+  double gathered_[4][3 * kSearchLanes];  // two blocks' sums gathered from the table
+  internal::BlockScore block_score_[4];
   std::vector<Scored> scores_;
   std::vector<Slot> heap_;
   int keep_ = 16;
+  bool keep_all_ = false;  // every candidate scored is kept (the search scores at most keep_)
   std::vector<int> last_coarse_;
   std::vector<int> near_;  // the candidates packed in near_diffuse_/near_specular_ (empty: none)
   std::size_t near_scored_ = 0;  // how many of near_ a near_last search scores (a prefix)

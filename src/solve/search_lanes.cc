@@ -35,48 +35,84 @@ inline void Store(float* p, const Lanes& v) { std::memcpy(p, &v, sizeof(Lanes));
 
 }  // namespace
 
+// `product` and `cost` on B blocks for the same pixel at once: each block's accumulations are the
+// single block's, in the same order, and the B chains of additions run side by side instead of
+// one after another.
+template <int B>
+IPHONG_LANE_BODY void ProductBlocks(const float* const* diffuse, const float* const* specular,
+                                    bool lobe, const int* lit, int n, const float* y,
+                                    float* const* a_out, float* const* b_out) {
+  Lanes a[B] = {}, b[B] = {}, row;
+  if (lobe) {
+    for (int t = 0; t < n; ++t) {
+      const int j = lit[t];
+      for (int q = 0; q < B; ++q) {
+        Load(&row, diffuse[q] + j * kLanes);
+        a[q] += y[j] * row;
+        Load(&row, specular[q] + j * kLanes);
+        b[q] += y[j] * row;
+      }
+    }
+  } else {
+    for (int t = 0; t < n; ++t) {
+      const int j = lit[t];
+      for (int q = 0; q < B; ++q) {
+        Load(&row, diffuse[q] + j * kLanes);
+        a[q] += y[j] * row;
+      }
+    }
+  }
+  for (int q = 0; q < B; ++q) {
+    Store(a_out[q], a[q]);
+    if (lobe) Store(b_out[q], b[q]);
+  }
+}
+
 IPHONG_LANE_BODY void ProductBody(const float* diffuse, const float* specular, bool lobe,
                                   const int* lit, int n, const float* y, float* a_out,
                                   float* b_out) {
-  Lanes a = {}, b = {}, row;
+  ProductBlocks<1>(&diffuse, &specular, lobe, lit, n, y, &a_out, &b_out);
+}
+
+template <int B>
+IPHONG_LANE_BODY void CostBlocks(const float* const* diffuse, const float* const* specular,
+                                 bool lobe, const int* lit, int n, const float* y,
+                                 const float* const* kd_in, const float* const* ks_in,
+                                 float floor_in, float* const* cost_out,
+                                 float* const* clipped_out) {
+  const Lanes zero = {}, floor = zero + floor_in;
+  Lanes kd[B], ks[B], d, s, cost[B] = {}, clipped[B] = {};
+  for (int q = 0; q < B; ++q) {
+    Load(&kd[q], kd_in[q]);
+    Load(&ks[q], ks_in[q]);
+  }
   for (int t = 0; t < n; ++t) {
     const int j = lit[t];
-    Load(&row, diffuse + j * kLanes);
-    a += y[j] * row;
+    for (int q = 0; q < B; ++q) {
+      Load(&d, diffuse[q] + j * kLanes);
+      Lanes r = y[j] - kd[q] * d;
+      if (lobe) {
+        Load(&s, specular[q] + j * kLanes);
+        r -= ks[q] * s;
+      }
+      const Lanes under = floor - r;
+      clipped[q] += under > zero ? under : zero;
+      const Lanes kept = r > floor ? r : floor;
+      cost[q] += kept * kept;
+    }
   }
-  Store(a_out, a);
-  if (!lobe) return;
-  for (int t = 0; t < n; ++t) {
-    const int j = lit[t];
-    Load(&row, specular + j * kLanes);
-    b += y[j] * row;
+  for (int q = 0; q < B; ++q) {
+    Store(cost_out[q], cost[q]);
+    Store(clipped_out[q], clipped[q]);
   }
-  Store(b_out, b);
 }
 
 IPHONG_LANE_BODY void CostBody(const float* diffuse, const float* specular, bool lobe,
                                const int* lit, int n, const float* y, const float* kd_in,
                                const float* ks_in, float floor_in, float* cost_out,
                                float* clipped_out) {
-  const Lanes zero = {}, floor = zero + floor_in;
-  Lanes kd, ks, d, s, cost = {}, clipped = {};
-  Load(&kd, kd_in);
-  Load(&ks, ks_in);
-  for (int t = 0; t < n; ++t) {
-    const int j = lit[t];
-    Load(&d, diffuse + j * kLanes);
-    Lanes r = y[j] - kd * d;
-    if (lobe) {
-      Load(&s, specular + j * kLanes);
-      r -= ks * s;
-    }
-    const Lanes under = floor - r;
-    clipped += under > zero ? under : zero;
-    const Lanes kept = r > floor ? r : floor;
-    cost += kept * kept;
-  }
-  Store(cost_out, cost);
-  Store(clipped_out, clipped);
+  CostBlocks<1>(&diffuse, &specular, lobe, lit, n, y, &kd_in, &ks_in, floor_in, &cost_out,
+                &clipped_out);
 }
 
 IPHONG_LANE_BODY void WeightedSumsBody(const float* diffuse, const float* specular, const int* lit,
@@ -193,57 +229,74 @@ IPHONG_LANE_BODY void PackBody(const float* const* rows, int k, float* out) {
   }
 }
 
-// The screening of one block (LaneKernels::score): the bodies above in sequence, with the sums in
-// double N lanes at a time, each term as the scalar search computed it (d² as double(d)·double(d),
-// an excluded light's subtracted as a sum of its negated term).
+// The screening of B blocks (LaneKernels::score, score2): the bodies above in sequence, with the
+// sums in double N lanes at a time, each term as the scalar search computed it (d² as
+// double(d)·double(d), an excluded light's subtracted as a sum of its negated term).
+template <int N, int B>
+IPHONG_LANE_BODY void ScoreBlocks(const float* const* diffuse, const float* const* specular,
+                                  bool lobe, const int* lit, int n, const float* y,
+                                  const double* const* base, const int* excluded, int n_excluded,
+                                  const PairSettings& pair, float floor, BlockScore* out) {
+  typedef typename Vec<N>::D V;
+  typedef typename Vec<N>::F F;
+  float a[B][kLanes], b[B][kLanes] = {};  // b stays 0 without a lobe
+  float *a_at[B], *b_at[B];
+  for (int q = 0; q < B; ++q) a_at[q] = a[q], b_at[q] = b[q];
+  ProductBlocks<B>(diffuse, specular, lobe, lit, n, y, a_at, b_at);
+  float kd[B][kLanes], ks[B][kLanes], *cost_at[B], *clipped_at[B];
+  const float *kd_at[B], *ks_at[B];
+  for (int q = 0; q < B; ++q) {
+    double sums[5 * kLanes];
+    for (int i = 0; i < kLanes; i += N) {
+      V dd = {}, dx = {}, ss = {};
+      F df, sf, af, bf;
+      if (base[q]) {
+        std::memcpy(&dd, base[q] + i, sizeof dd);
+        std::memcpy(&dx, base[q] + kLanes + i, sizeof dx);
+        std::memcpy(&ss, base[q] + 2 * kLanes + i, sizeof ss);
+      }
+      const int* lights = base[q] ? excluded : lit;
+      const int count = base[q] ? n_excluded : n;
+      const double sign = base[q] ? -1.0 : 1.0;
+      for (int t = 0; t < count; ++t) {
+        const int j = lights[t];
+        std::memcpy(&df, diffuse[q] + j * kLanes + i, sizeof df);
+        std::memcpy(&sf, specular[q] + j * kLanes + i, sizeof sf);
+        const V d = __builtin_convertvector(df, V), s = __builtin_convertvector(sf, V);
+        dd += sign * d * d, dx += sign * d * s, ss += sign * s * s;
+      }
+      std::memcpy(&af, a[q] + i, sizeof af);
+      std::memcpy(&bf, b[q] + i, sizeof bf);
+      const V ad = __builtin_convertvector(af, V), bd = __builtin_convertvector(bf, V);
+      std::memcpy(sums + i, &dd, sizeof dd);
+      std::memcpy(sums + kLanes + i, &dx, sizeof dx);
+      std::memcpy(sums + 2 * kLanes + i, &ss, sizeof ss);
+      std::memcpy(sums + 3 * kLanes + i, &ad, sizeof ad);
+      std::memcpy(sums + 4 * kLanes + i, &bd, sizeof bd);
+    }
+    PairBody<N>(sums, pair.prior_weight, pair.prior_ks, pair.ridge, pair.fixed_ks, out[q].kd,
+                out[q].ks);
+    for (int i = 0; i < kLanes; i += N) {
+      V kdd, ksd;
+      std::memcpy(&kdd, out[q].kd + i, sizeof kdd);
+      std::memcpy(&ksd, out[q].ks + i, sizeof ksd);
+      const F kdf = __builtin_convertvector(kdd, F), ksf = __builtin_convertvector(ksd, F);
+      std::memcpy(kd[q] + i, &kdf, sizeof kdf);
+      std::memcpy(ks[q] + i, &ksf, sizeof ksf);
+    }
+    kd_at[q] = kd[q], ks_at[q] = ks[q];
+    cost_at[q] = out[q].cost, clipped_at[q] = out[q].clipped;
+  }
+  CostBlocks<B>(diffuse, specular, lobe, lit, n, y, kd_at, ks_at, floor, cost_at, clipped_at);
+}
+
 template <int N>
 IPHONG_LANE_BODY void ScoreBody(const float* diffuse, const float* specular, bool lobe,
                                 const int* lit, int n, const float* y, const double* base,
                                 const int* excluded, int n_excluded, const PairSettings& pair,
                                 float floor, BlockScore* out) {
-  typedef typename Vec<N>::D V;
-  typedef typename Vec<N>::F F;
-  float a[kLanes], b[kLanes] = {};  // b stays 0 without a lobe
-  ProductBody(diffuse, specular, lobe, lit, n, y, a, b);
-  double sums[5 * kLanes];
-  for (int i = 0; i < kLanes; i += N) {
-    V dd = {}, dx = {}, ss = {};
-    F df, sf, af, bf;
-    if (base) {
-      std::memcpy(&dd, base + i, sizeof dd);
-      std::memcpy(&dx, base + kLanes + i, sizeof dx);
-      std::memcpy(&ss, base + 2 * kLanes + i, sizeof ss);
-    }
-    const int* lights = base ? excluded : lit;
-    const int count = base ? n_excluded : n;
-    const double sign = base ? -1.0 : 1.0;
-    for (int t = 0; t < count; ++t) {
-      const int j = lights[t];
-      std::memcpy(&df, diffuse + j * kLanes + i, sizeof df);
-      std::memcpy(&sf, specular + j * kLanes + i, sizeof sf);
-      const V d = __builtin_convertvector(df, V), s = __builtin_convertvector(sf, V);
-      dd += sign * d * d, dx += sign * d * s, ss += sign * s * s;
-    }
-    std::memcpy(&af, a + i, sizeof af);
-    std::memcpy(&bf, b + i, sizeof bf);
-    const V ad = __builtin_convertvector(af, V), bd = __builtin_convertvector(bf, V);
-    std::memcpy(sums + i, &dd, sizeof dd);
-    std::memcpy(sums + kLanes + i, &dx, sizeof dx);
-    std::memcpy(sums + 2 * kLanes + i, &ss, sizeof ss);
-    std::memcpy(sums + 3 * kLanes + i, &ad, sizeof ad);
-    std::memcpy(sums + 4 * kLanes + i, &bd, sizeof bd);
-  }
-  PairBody<N>(sums, pair.prior_weight, pair.prior_ks, pair.ridge, pair.fixed_ks, out->kd, out->ks);
-  float kd[kLanes], ks[kLanes];
-  for (int i = 0; i < kLanes; i += N) {
-    V kdd, ksd;
-    std::memcpy(&kdd, out->kd + i, sizeof kdd);
-    std::memcpy(&ksd, out->ks + i, sizeof ksd);
-    const F kdf = __builtin_convertvector(kdd, F), ksf = __builtin_convertvector(ksd, F);
-    std::memcpy(kd + i, &kdf, sizeof kdf);
-    std::memcpy(ks + i, &ksf, sizeof ksf);
-  }
-  CostBody(diffuse, specular, lobe, lit, n, y, kd, ks, floor, out->cost, out->clipped);
+  ScoreBlocks<N, 1>(&diffuse, &specular, lobe, lit, n, y, &base, excluded, n_excluded, pair, floor,
+                    out);
 }
 
 namespace {
@@ -272,6 +325,21 @@ void ScoreBaseline(const float* diffuse, const float* specular, bool lobe, const
                    const float* y, const double* base, const int* excluded, int n_excluded,
                    const PairSettings& pair, float floor, BlockScore* out) {
   ScoreBody<2>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor, out);
+}
+
+void Score2Baseline(const float* const* diffuse, const float* const* specular, bool lobe,
+                    const int* lit, int n, const float* y, const double* const* base,
+                    const int* excluded, int n_excluded, const PairSettings& pair, float floor,
+                    BlockScore* out) {
+  ScoreBlocks<2, 2>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor,
+                    out);
+}
+void Score4Baseline(const float* const* diffuse, const float* const* specular, bool lobe,
+                    const int* lit, int n, const float* y, const double* const* base,
+                    const int* excluded, int n_excluded, const PairSettings& pair, float floor,
+                    BlockScore* out) {
+  ScoreBlocks<2, 4>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor,
+                    out);
 }
 
 void PackBaseline(const float* const* rows, int k, float* out) { PackBody(rows, k, out); }
@@ -310,6 +378,24 @@ __attribute__((target("avx2"))) void ScoreAvx2(const float* diffuse, const float
                                                float floor, BlockScore* out) {
   ScoreBody<4>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor, out);
 }
+__attribute__((target("avx2"))) void Score2Avx2(const float* const* diffuse,
+                                                const float* const* specular, bool lobe,
+                                                const int* lit, int n, const float* y,
+                                                const double* const* base, const int* excluded,
+                                                int n_excluded, const PairSettings& pair,
+                                                float floor, BlockScore* out) {
+  ScoreBlocks<4, 2>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor,
+                    out);
+}
+__attribute__((target("avx2"))) void Score4Avx2(const float* const* diffuse,
+                                                const float* const* specular, bool lobe,
+                                                const int* lit, int n, const float* y,
+                                                const double* const* base, const int* excluded,
+                                                int n_excluded, const PairSettings& pair,
+                                                float floor, BlockScore* out) {
+  ScoreBlocks<4, 4>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor,
+                    out);
+}
 #endif
 
 }  // namespace
@@ -317,14 +403,14 @@ __attribute__((target("avx2"))) void ScoreAvx2(const float* diffuse, const float
 const LaneKernels& BaselineLaneKernels() {
   static const LaneKernels kernels{"baseline",           ProductBaseline, CostBaseline,
                                    WeightedSumsBaseline, PairBaseline,    ScoreBaseline,
-                                   PackBaseline};
+                                   Score2Baseline,       Score4Baseline,  PackBaseline};
   return kernels;
 }
 
 const LaneKernels* Avx2LaneKernels() {
 #if IPHONG_LANES_AVX2
-  static const LaneKernels kernels{"avx2",   ProductAvx2, CostAvx2, WeightedSumsAvx2,
-                                   PairAvx2, ScoreAvx2,   PackAvx2};
+  static const LaneKernels kernels{"avx2",    ProductAvx2, CostAvx2,   WeightedSumsAvx2, PairAvx2,
+                                   ScoreAvx2, Score2Avx2,  Score4Avx2, PackAvx2};
   static const bool available = __builtin_cpu_supports("avx2");
   return available ? &kernels : nullptr;
 #else

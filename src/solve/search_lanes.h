@@ -61,6 +61,14 @@ struct LaneKernels {
   void (*score)(const float* diffuse, const float* specular, bool lobe, const int* lit, int n,
                 const float* y, const double* base, const int* excluded, int n_excluded,
                 const PairSettings& pair, float floor, BlockScore* out);
+  // `score` on two and on four blocks for the same pixel (diffuse[q], specular[q], base[q] and
+  // out[q] for block q): each block's result is `score`'s on it, the blocks computed side by side
+  // (one block's sums are a chain of additions, each waiting on the last).
+  using ScoreMany = void (*)(const float* const* diffuse, const float* const* specular, bool lobe,
+                             const int* lit, int n, const float* y, const double* const* base,
+                             const int* excluded, int n_excluded, const PairSettings& pair,
+                             float floor, BlockScore* out);
+  ScoreMany score2, score4;
   // A block packed from kLanes rows of k floats each: out[j·kLanes + i] = rows[i][j] (a copy).
   void (*pack)(const float* const* rows, int k, float* out);
 };

@@ -258,6 +258,74 @@ TEST(Normals, FusedScreeningEqualsItsStepsBitwise) {
   }
 }
 
+// score2 and score4 compute blocks side by side: each block's result must be score's on it alone,
+// bit for bit, whatever the others hold (distinct factors, one block with a base and one without,
+// with and without a lobe, a prior and a fixed ks).
+TEST(Normals, ScreeningBlocksSideBySideEqualOneAtATime) {
+  constexpr int W = internal::kLanes, K = 13, B = 4;
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<float> u(0, 1);
+  std::vector<float> d(B * K * W), s(B * K * W), y(K);
+  std::vector<int> lit, excluded;
+  for (int j = 0; j < K; ++j) {
+    (j % 5 == 3 ? excluded : lit).push_back(j);
+    y[j] = j % 4 == 0 ? 0.02f * u(rng) : u(rng);
+  }
+  for (std::size_t v = 0; v < d.size(); ++v) {
+    d[v] = v % 7 == 0 ? 0.0f : u(rng);
+    s[v] = v % 3 == 1 ? 0.0f : std::pow(u(rng), 5.0f);
+  }
+  std::vector<double> base(B * 3 * W, 0.0);
+  for (int q = 0; q < B; ++q) {
+    for (int i = 0; i < W; ++i) {
+      for (int j = 0; j < K; ++j) {
+        const double di = d[(q * K + j) * W + i], si = s[(q * K + j) * W + i];
+        base[q * 3 * W + i] += di * di, base[q * 3 * W + W + i] += di * si;
+        base[q * 3 * W + 2 * W + i] += si * si;
+      }
+    }
+  }
+  std::vector<const internal::LaneKernels*> variants = {&internal::BaselineLaneKernels()};
+  if (internal::Avx2LaneKernels()) variants.push_back(internal::Avx2LaneKernels());
+  const double fixed = 0.4;
+  int compared = 0;
+  for (const internal::LaneKernels* v : variants) {
+    for (const bool lobe : {true, false}) {
+      for (const int settings : {0, 1, 2}) {
+        internal::PairSettings pair;
+        pair.ridge = internal::kKsRidge;
+        if (settings == 1) pair.prior_weight = 0.5, pair.prior_ks = 0.3;
+        if (settings == 2) pair.fixed_ks = &fixed;
+        const float *dp[B], *sp[B];
+        const double* bp[B];
+        for (int q = 0; q < B; ++q) {
+          dp[q] = d.data() + q * K * W, sp[q] = s.data() + q * K * W;
+          bp[q] = q % 2 == 0 ? base.data() + q * 3 * W : nullptr;
+        }
+        internal::BlockScore one[B], many[B];
+        for (int q = 0; q < B; ++q) {
+          v->score(dp[q], sp[q], lobe, lit.data(), static_cast<int>(lit.size()), y.data(), bp[q],
+                   excluded.data(), static_cast<int>(excluded.size()), pair, -0.05f, &one[q]);
+        }
+        for (const int blocks : {2, 4}) {
+          (blocks == 2 ? v->score2 : v->score4)(
+              dp, sp, lobe, lit.data(), static_cast<int>(lit.size()), y.data(), bp, excluded.data(),
+              static_cast<int>(excluded.size()), pair, -0.05f, many);
+          for (int q = 0; q < blocks; ++q) {
+            EXPECT_EQ(std::memcmp(&one[q], &many[q], sizeof one[q]), 0)
+                << v->name << " blocks " << blocks << " block " << q << " lobe " << lobe
+                << " settings " << settings;
+            ++compared;
+          }
+          // The blocks differ, so a mix-up of their pointers would show.
+          EXPECT_NE(std::memcmp(one[0].cost, one[1].cost, sizeof one[0].cost), 0);
+        }
+      }
+    }
+  }
+  EXPECT_EQ(compared, static_cast<int>(variants.size()) * 2 * 3 * 6);
+}
+
 // The lane kernels' 2 × 2 non-negative solve against internal::NonNegativePair, the scalar
 // function every other fit calls: bitwise equal in every lane, with and without a prior and with
 // a fixed ks, over systems that take each branch (the free solution, either coefficient alone,
