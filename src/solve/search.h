@@ -160,7 +160,7 @@ class NormalSearch {
   // Scores candidates [begin, end) — the least-squares coefficients on the usable lights and the
   // censored cost there — and appends them to scores_, a packed block at a time.
   void ScoreRange(int begin, int end, double t, const double* fixed_ks);
-  // Scores `blocks` (1 or 2) packed blocks (K × kSearchLanes factors each, and with sums[q] their
+  // Scores `blocks` (1, 2 or 4) packed blocks (K × kSearchLanes factors each, and with sums[q] their
   // sums over every light packed as CandidateTable::sums_block gives them, else nullptr), lane i
   // of block q holding candidate candidates[q][i] for i < count[q]; `near`: blocks of
   // near_diffuse_, else the table's. The blocks' results are kept (Keep) in their order.
@@ -237,7 +237,7 @@ class NormalSearch {
   std::vector<float> costs_;
   std::vector<Scored> sorted_;
   std::vector<int> rank_, order_;
-  double gathered_[4][3 * kSearchLanes];  // two blocks' sums gathered from the table
+  double gathered_[4][3 * kSearchLanes];  // up to four blocks' sums gathered from the table
   internal::BlockScore block_score_[4];
   std::vector<Scored> scores_;
   std::vector<Slot> heap_;
