@@ -160,9 +160,9 @@ class NormalSearch {
   // Scores candidates [begin, end) — the least-squares coefficients on the usable lights and the
   // censored cost there — and appends them to scores_, a packed block at a time.
   void ScoreRange(int begin, int end, double t, const double* fixed_ks);
-  // Scores `blocks` (1, 2 or 4) packed blocks (K × kSearchLanes factors each, and with sums[q] their
-  // sums over every light packed as CandidateTable::sums_block gives them, else nullptr), lane i
-  // of block q holding candidate candidates[q][i] for i < count[q]; `near`: blocks of
+  // Scores `blocks` (1, 2 or 4) packed blocks (K × kSearchLanes factors each, and with sums[q]
+  // their sums over every light packed as CandidateTable::sums_block gives them, else nullptr),
+  // lane i of block q holding candidate candidates[q][i] for i < count[q]; `near`: blocks of
   // near_diffuse_, else the table's. The blocks' results are kept (Keep) in their order.
   void ScoreBlocks(int blocks, const float* const* diffuse, const float* const* specular,
                    const double* const* sums, const int* const* candidates, const int* count,
