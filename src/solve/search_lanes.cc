@@ -229,8 +229,8 @@ IPHONG_LANE_BODY void PackBody(const float* const* rows, int k, float* out) {
   }
 }
 
-// The screening of B blocks (LaneKernels::score, score2): the bodies above in sequence, with the
-// sums in double N lanes at a time, each term as the scalar search computed it (d² as
+// The screening of B blocks (LaneKernels::score, score2, score4): the bodies above in sequence,
+// with the sums in double N lanes at a time, each term as the scalar search computed it (d² as
 // double(d)·double(d), an excluded light's subtracted as a sum of its negated term).
 template <int N, int B>
 IPHONG_LANE_BODY void ScoreBlocks(const float* const* diffuse, const float* const* specular,
@@ -327,18 +327,12 @@ void ScoreBaseline(const float* diffuse, const float* specular, bool lobe, const
   ScoreBody<2>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor, out);
 }
 
-void Score2Baseline(const float* const* diffuse, const float* const* specular, bool lobe,
-                    const int* lit, int n, const float* y, const double* const* base,
-                    const int* excluded, int n_excluded, const PairSettings& pair, float floor,
-                    BlockScore* out) {
-  ScoreBlocks<2, 2>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor,
-                    out);
-}
-void Score4Baseline(const float* const* diffuse, const float* const* specular, bool lobe,
-                    const int* lit, int n, const float* y, const double* const* base,
-                    const int* excluded, int n_excluded, const PairSettings& pair, float floor,
-                    BlockScore* out) {
-  ScoreBlocks<2, 4>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor,
+template <int B>
+void ScoreManyBaseline(const float* const* diffuse, const float* const* specular, bool lobe,
+                       const int* lit, int n, const float* y, const double* const* base,
+                       const int* excluded, int n_excluded, const PairSettings& pair, float floor,
+                       BlockScore* out) {
+  ScoreBlocks<2, B>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor,
                     out);
 }
 
@@ -378,22 +372,14 @@ __attribute__((target("avx2"))) void ScoreAvx2(const float* diffuse, const float
                                                float floor, BlockScore* out) {
   ScoreBody<4>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor, out);
 }
-__attribute__((target("avx2"))) void Score2Avx2(const float* const* diffuse,
-                                                const float* const* specular, bool lobe,
-                                                const int* lit, int n, const float* y,
-                                                const double* const* base, const int* excluded,
-                                                int n_excluded, const PairSettings& pair,
-                                                float floor, BlockScore* out) {
-  ScoreBlocks<4, 2>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor,
-                    out);
-}
-__attribute__((target("avx2"))) void Score4Avx2(const float* const* diffuse,
-                                                const float* const* specular, bool lobe,
-                                                const int* lit, int n, const float* y,
-                                                const double* const* base, const int* excluded,
-                                                int n_excluded, const PairSettings& pair,
-                                                float floor, BlockScore* out) {
-  ScoreBlocks<4, 4>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor,
+template <int B>
+__attribute__((target("avx2"))) void ScoreManyAvx2(const float* const* diffuse,
+                                                   const float* const* specular, bool lobe,
+                                                   const int* lit, int n, const float* y,
+                                                   const double* const* base, const int* excluded,
+                                                   int n_excluded, const PairSettings& pair,
+                                                   float floor, BlockScore* out) {
+  ScoreBlocks<4, B>(diffuse, specular, lobe, lit, n, y, base, excluded, n_excluded, pair, floor,
                     out);
 }
 #endif
@@ -401,16 +387,17 @@ __attribute__((target("avx2"))) void Score4Avx2(const float* const* diffuse,
 }  // namespace
 
 const LaneKernels& BaselineLaneKernels() {
-  static const LaneKernels kernels{"baseline",           ProductBaseline, CostBaseline,
-                                   WeightedSumsBaseline, PairBaseline,    ScoreBaseline,
-                                   Score2Baseline,       Score4Baseline,  PackBaseline};
+  static const LaneKernels kernels{"baseline",           ProductBaseline,      CostBaseline,
+                                   WeightedSumsBaseline, PairBaseline,         ScoreBaseline,
+                                   ScoreManyBaseline<2>, ScoreManyBaseline<4>, PackBaseline};
   return kernels;
 }
 
 const LaneKernels* Avx2LaneKernels() {
 #if IPHONG_LANES_AVX2
-  static const LaneKernels kernels{"avx2",    ProductAvx2, CostAvx2,   WeightedSumsAvx2, PairAvx2,
-                                   ScoreAvx2, Score2Avx2,  Score4Avx2, PackAvx2};
+  static const LaneKernels kernels{"avx2",           ProductAvx2,      CostAvx2,
+                                   WeightedSumsAvx2, PairAvx2,         ScoreAvx2,
+                                   ScoreManyAvx2<2>, ScoreManyAvx2<4>, PackAvx2};
   static const bool available = __builtin_cpu_supports("avx2");
   return available ? &kernels : nullptr;
 #else
