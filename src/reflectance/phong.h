@@ -19,8 +19,10 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <type_traits>
+#include <vector>
 
 #include "core/types.h"
+#include "reflectance/powers.h"
 
 namespace iphong::reflectance {
 
@@ -100,6 +102,16 @@ struct DirectionsOf {
 template <typename D>
 using Directions = typename DirectionsOf<D>::type;
 
+// The value of a scalar: a Jet's `a`, a number itself.
+template <typename T>
+double ValueOf(const T& x) {
+  if constexpr (IsJet<T>::value) {
+    return static_cast<double>(x.a);
+  } else {
+    return static_cast<double>(x);
+  }
+}
+
 // x^n for n ≥ 0 by repeated squaring.
 template <typename T>
 T IntegerPower(const T& x, int n) {
@@ -143,6 +155,37 @@ Vec3T<T> Reflect(const Vec3T<T>& normal_cam, const T& normal_dot_v, const V& v) 
   return T(2) * normal_dot_v * normal_cam - v;
 }
 
+// The lobe's cosine for one light whose N·L is n_dot_l > 0: R·V (Phong), N·H (Blinn-Phong) or
+// N·L itself (the normal-centred foil); ≤ 0 where the lobe is off (and L = −V under Blinn-Phong,
+// which leaves H undefined: no highlight can be seen there). *lambda is the fast approximation's
+// |R − V|²/2 (|N − H|²/2, 1 − N·L), 0 with the exact power. Only for the lobes that have one.
+template <typename T, typename D = T>
+T LobeCosine(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam,
+             const detail::Directions<D>& light_dir_cam, const T& n_dot_l,
+             const ModelOptions& options, T* lambda) {
+  using std::sqrt;
+  const bool fast = options.power == PowerMode::kFastApprox;
+  *lambda = T(0);
+  if (options.lobe == Lobe::kNormalCentred) {
+    if (fast) *lambda = T(1) - n_dot_l;
+    return n_dot_l;
+  }
+  if (options.lobe == Lobe::kPhong) {
+    const Vec3T<T> reflect_cam = Reflect(normal_cam, n_dot_l, light_dir_cam);
+    const T cosine = reflect_cam.dot(view_cam);
+    // λ feeds only the fast approximation; the exact power would waste a Jet product on it.
+    if (fast && cosine > T(0)) *lambda = T(0.5) * (reflect_cam - view_cam).squaredNorm();
+    return cosine;
+  }
+  const Vec3T<D> sum = light_dir_cam + view_cam;
+  const D sum_norm2 = sum.squaredNorm();
+  if (!(sum_norm2 > D(1e-24))) return T(0);
+  const Vec3T<D> half_cam = sum / sqrt(sum_norm2);
+  const T cosine = normal_cam.dot(half_cam);
+  if (fast && cosine > T(0)) *lambda = T(0.5) * (normal_cam - half_cam).squaredNorm();
+  return cosine;
+}
+
 // The specular lobe value (R·V)^n or (N·H)^n for one light, zero where seed 003's rules say so
 // (N·L ≤ 0, or the lobe's cosine ≤ 0). All vectors unit, camera frame. The view and light may
 // have a plain scalar type D while the normal is a Jet (SpecularLobe<Jet, double>): constants
@@ -151,35 +194,12 @@ template <typename T, typename D = T>
 T SpecularLobe(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam,
                const detail::Directions<D>& light_dir_cam, const T& shininess,
                const ModelOptions& options) {
-  using std::sqrt;
-  if (options.lobe == Lobe::kLambert) return T(0);
+  if (options.lobe == Lobe::kLambert || options.lobe == Lobe::kOrenNayar) return T(0);
   const T n_dot_l = normal_cam.dot(light_dir_cam);
   if (!(n_dot_l > T(0))) return T(0);
-  if (options.lobe == Lobe::kOrenNayar) return T(0);
-  if (options.lobe == Lobe::kNormalCentred) {
-    const T lambda = options.power == PowerMode::kFastApprox ? T(1) - n_dot_l : T(0);
-    return LobePower(n_dot_l, lambda, shininess, options);
-  }
-  if (options.lobe == Lobe::kPhong) {
-    const Vec3T<T> reflect_cam = Reflect(normal_cam, n_dot_l, light_dir_cam);
-    const T cosine = reflect_cam.dot(view_cam);
-    if (!(cosine > T(0))) return T(0);
-    // λ feeds only the fast approximation; the exact power would waste a Jet product on it.
-    const T lambda = options.power == PowerMode::kFastApprox
-                         ? T(0.5) * (reflect_cam - view_cam).squaredNorm()
-                         : T(0);
-    return LobePower(cosine, lambda, shininess, options);
-  }
-  // Blinn-Phong. L = −V leaves H undefined; no highlight can be seen there.
-  const Vec3T<D> sum = light_dir_cam + view_cam;
-  const D sum_norm2 = sum.squaredNorm();
-  if (!(sum_norm2 > D(1e-24))) return T(0);
-  const Vec3T<D> half_cam = sum / sqrt(sum_norm2);
-  const T cosine = normal_cam.dot(half_cam);
+  T lambda;
+  const T cosine = LobeCosine<T, D>(normal_cam, view_cam, light_dir_cam, n_dot_l, options, &lambda);
   if (!(cosine > T(0))) return T(0);
-  const T lambda = options.power == PowerMode::kFastApprox
-                       ? T(0.5) * (normal_cam - half_cam).squaredNorm()
-                       : T(0);
   return LobePower(cosine, lambda, shininess, options);
 }
 
@@ -230,6 +250,61 @@ LightFactors<T> ShadingFactors(const Vec3T<T>& normal_cam, const detail::Directi
   f.diffuse = n_dot_l;
   f.specular = SpecularLobe<T, D>(normal_cam, view_cam, light_dir_cam, shininess, options);
   return f;
+}
+
+// ShadingFactorsOfLights' buffers, kept by the caller between calls (nothing allocated per call).
+template <typename T>
+struct LobeScratch {
+  std::vector<T> cosine;
+  std::vector<double> value;
+  std::vector<int> light;
+};
+
+// ShadingFactors for every light j < count with use(j), into out[j] (the others are left as
+// they are), at a constant shininess: the lobes' cosines first, then their powers c^n in one
+// batch (powers.h's ConstantPowers: glibc's vector exp and log, within ~1e-15 relative of
+// LobePower's scalar ones on any lobe value above 1e-6). A Jet's power carries LobePower's
+// derivative n·c^n/c·dc. Where the power is not exp(n log c) — an integer n (repeated squaring),
+// the fast approximation — and for the models without a lobe, it is ShadingFactors light by light.
+template <typename T, typename D, typename Use>
+void ShadingFactorsOfLights(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam,
+                            const Vec3T<D>* light_dir_cam, int count, double shininess,
+                            const ModelOptions& options, Use use, LobeScratch<T>& scratch,
+                            LightFactors<T>* out) {
+  int integer = 0;
+  if (options.lobe == Lobe::kLambert || options.lobe == Lobe::kOrenNayar ||
+      options.power != PowerMode::kExact || detail::IsConstantInteger(shininess, &integer)) {
+    const T n(shininess);
+    for (int j = 0; j < count; ++j) {
+      if (use(j)) out[j] = ShadingFactors<T, D>(normal_cam, view_cam, light_dir_cam[j], n, options);
+    }
+    return;
+  }
+  scratch.cosine.clear();
+  scratch.value.clear();
+  scratch.light.clear();
+  for (int j = 0; j < count; ++j) {
+    if (!use(j)) continue;
+    LightFactors<T>& f = out[j];
+    f = LightFactors<T>();
+    const T n_dot_l = normal_cam.dot(light_dir_cam[j]);
+    if (!(n_dot_l > T(0))) continue;
+    f.diffuse = n_dot_l;
+    T lambda;
+    const T cosine =
+        LobeCosine<T, D>(normal_cam, view_cam, light_dir_cam[j], n_dot_l, options, &lambda);
+    if (!(cosine > T(0))) continue;
+    scratch.cosine.push_back(cosine);
+    scratch.value.push_back(detail::ValueOf(cosine));
+    scratch.light.push_back(j);
+  }
+  ConstantPowers(scratch.value.data(), scratch.value.size(), shininess, scratch.value.data());
+  for (std::size_t i = 0; i < scratch.light.size(); ++i) {
+    const T& c = scratch.cosine[i];
+    const double power = scratch.value[i], at = detail::ValueOf(c);
+    // c^n + (c − c₀)·n·c₀^n/c₀: the value exact, the derivative's part the chain rule's.
+    out[scratch.light[i]].specular = T(power) + (c - T(at)) * (shininess * power / at);
+  }
 }
 
 // One light's contribution from its factors: Id ⊙ kd · diffuse + Is ⊙ ks · specular. Solvers that

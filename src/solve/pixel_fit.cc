@@ -40,6 +40,7 @@ struct PixelModel {
   double offset_scale[3] = {0, 0, 0};
 
   mutable std::vector<double> adjusted;  // the observations less their offsets (Observations)
+  mutable reflectance::LobeScratch<Jet2> scratch;  // Evaluate's
 
   // The observations (K × channels) the fit at these factors sees: y less each light's offset at
   // the factors' N·L (a light behind the surface has none: the model predicts it dark); y itself
@@ -72,14 +73,10 @@ struct PixelModel {
     const Jet2 x0(x[0], 0), x1(x[1], 1);
     const Vec3T<Jet2> raw = n0.cast<Jet2>() + x0 * t1 + x1 * t2;
     const Vec3T<Jet2> normal = raw / raw.norm();
-    const Vec3d& view = lights->view();
-    const Jet2 n(shininess);
     factors->resize(data->images);
-    for (int j = 0; j < data->images; ++j) {
-      if (weight && (weight[j] != 0) != weighted) continue;
-      (*factors)[j] =
-          reflectance::ShadingFactors<Jet2, double>(normal, view, lights->direction(j), n, model);
-    }
+    reflectance::ShadingFactorsOfLights<Jet2, double>(
+        normal, lights->view(), &lights->direction(0), data->images, shininess, model,
+        [&](int j) { return !weight || (weight[j] != 0) == weighted; }, scratch, factors->data());
   }
 
   // `obs`: Observations(factors).
