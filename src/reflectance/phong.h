@@ -157,33 +157,41 @@ Vec3T<T> Reflect(const Vec3T<T>& normal_cam, const T& normal_dot_v, const V& v) 
 
 // The lobe's cosine for one light whose N·L is n_dot_l > 0: R·V (Phong), N·H (Blinn-Phong) or
 // N·L itself (the normal-centred foil); ≤ 0 where the lobe is off (and L = −V under Blinn-Phong,
-// which leaves H undefined: no highlight can be seen there). *lambda is the fast approximation's
-// |R − V|²/2 (|N − H|²/2, 1 − N·L), 0 with the exact power. Only for the lobes that have one.
+// which leaves H undefined: no highlight can be seen there). `lambda` is the fast
+// approximation's |R − V|²/2 (|N − H|²/2, 1 − N·L), 0 with the exact power. Only for the lobes
+// that have one.
+template <typename T>
+struct LobeCosineOf {
+  T cosine = T(0);
+  T lambda = T(0);
+};
+
 template <typename T, typename D = T>
-T LobeCosine(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam,
-             const detail::Directions<D>& light_dir_cam, const T& n_dot_l,
-             const ModelOptions& options, T* lambda) {
+LobeCosineOf<T> LobeCosine(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam,
+                           const detail::Directions<D>& light_dir_cam, const T& n_dot_l,
+                           const ModelOptions& options) {
   using std::sqrt;
   const bool fast = options.power == PowerMode::kFastApprox;
-  *lambda = T(0);
+  LobeCosineOf<T> out;
   if (options.lobe == Lobe::kNormalCentred) {
-    if (fast) *lambda = T(1) - n_dot_l;
-    return n_dot_l;
+    out.cosine = n_dot_l;
+    if (fast) out.lambda = T(1) - n_dot_l;
+    return out;
   }
   if (options.lobe == Lobe::kPhong) {
     const Vec3T<T> reflect_cam = Reflect(normal_cam, n_dot_l, light_dir_cam);
-    const T cosine = reflect_cam.dot(view_cam);
+    out.cosine = reflect_cam.dot(view_cam);
     // λ feeds only the fast approximation; the exact power would waste a Jet product on it.
-    if (fast && cosine > T(0)) *lambda = T(0.5) * (reflect_cam - view_cam).squaredNorm();
-    return cosine;
+    if (fast && out.cosine > T(0)) out.lambda = T(0.5) * (reflect_cam - view_cam).squaredNorm();
+    return out;
   }
   const Vec3T<D> sum = light_dir_cam + view_cam;
   const D sum_norm2 = sum.squaredNorm();
-  if (!(sum_norm2 > D(1e-24))) return T(0);
+  if (!(sum_norm2 > D(1e-24))) return out;
   const Vec3T<D> half_cam = sum / sqrt(sum_norm2);
-  const T cosine = normal_cam.dot(half_cam);
-  if (fast && cosine > T(0)) *lambda = T(0.5) * (normal_cam - half_cam).squaredNorm();
-  return cosine;
+  out.cosine = normal_cam.dot(half_cam);
+  if (fast && out.cosine > T(0)) out.lambda = T(0.5) * (normal_cam - half_cam).squaredNorm();
+  return out;
 }
 
 // The specular lobe value (R·V)^n or (N·H)^n for one light, zero where seed 003's rules say so
@@ -197,10 +205,9 @@ T SpecularLobe(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam
   if (options.lobe == Lobe::kLambert || options.lobe == Lobe::kOrenNayar) return T(0);
   const T n_dot_l = normal_cam.dot(light_dir_cam);
   if (!(n_dot_l > T(0))) return T(0);
-  T lambda;
-  const T cosine = LobeCosine<T, D>(normal_cam, view_cam, light_dir_cam, n_dot_l, options, &lambda);
-  if (!(cosine > T(0))) return T(0);
-  return LobePower(cosine, lambda, shininess, options);
+  const LobeCosineOf<T> c = LobeCosine<T, D>(normal_cam, view_cam, light_dir_cam, n_dot_l, options);
+  if (!(c.cosine > T(0))) return T(0);
+  return LobePower(c.cosine, c.lambda, shininess, options);
 }
 
 // Oren and Nayar's qualitative diffuse factor for the facets' slope σ (radians):
@@ -290,9 +297,8 @@ void ShadingFactorsOfLights(const Vec3T<T>& normal_cam, const detail::Directions
     const T n_dot_l = normal_cam.dot(light_dir_cam[j]);
     if (!(n_dot_l > T(0))) continue;
     f.diffuse = n_dot_l;
-    T lambda;
     const T cosine =
-        LobeCosine<T, D>(normal_cam, view_cam, light_dir_cam[j], n_dot_l, options, &lambda);
+        LobeCosine<T, D>(normal_cam, view_cam, light_dir_cam[j], n_dot_l, options).cosine;
     if (!(cosine > T(0))) continue;
     scratch.cosine.push_back(cosine);
     scratch.value.push_back(detail::ValueOf(cosine));
