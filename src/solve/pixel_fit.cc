@@ -161,7 +161,6 @@ struct PixelFitter::State {
   std::vector<reflectance::LightFactors<double>> values;
   std::vector<double> y_rgb, y_lum, usable, weights, residuals, bright;
   std::vector<double> saved_usable;  // usable outside a fold's fit
-  std::vector<double> last_weights;  // the weights a round was fitted with
   const float* obs = nullptr;
   Vec3d fitted_albedo = Vec3d::Zero(), fitted_specular = Vec3d::Zero();  // the last Fit's
   double brightness = 0, threshold = 0;
@@ -336,17 +335,12 @@ void PixelFitter::Fit(internal::PixelSolution& s, const double* lights) {
   st.Censor();
   Vec3d normal = s.normal;
   for (int round = 0; round < st.settings.rounds; ++round) {
-    const int iterations = st.Minimize(x);
-    s.iterations += iterations;
+    s.iterations += st.Minimize(x);
     const Vec3d previous = normal;
     normal = st.model.Normal(x);
     // Reweighting can no longer move a normal that moved less than 0.01 degrees.
     if (round > 0 && previous.dot(normal) > std::cos(1e-2 * M_PI / 180)) break;
-    st.last_weights.assign(st.weights.begin(), st.weights.end());
     st.Censor();
-    // The same weights pose the problem this round has just solved to Minimize's tolerance
-    // (unless it ran out of iterations): another round would only polish the noise.
-    if (iterations < st.settings.max_iterations && st.weights == st.last_weights) break;
     // A chart far from its centre bends; re-centre it (the factors' derivatives change).
     if (x.norm() > 0.25 && round + 1 < st.settings.rounds) {
       st.model.Center(normal);
