@@ -194,22 +194,6 @@ LobeCosineOf<T> LobeCosine(const Vec3T<T>& normal_cam, const detail::Directions<
   return out;
 }
 
-// The specular lobe value (R·V)^n or (N·H)^n for one light, zero where seed 003's rules say so
-// (N·L ≤ 0, or the lobe's cosine ≤ 0). All vectors unit, camera frame. The view and light may
-// have a plain scalar type D while the normal is a Jet (SpecularLobe<Jet, double>): constants
-// then cost no derivative arithmetic (Ceres declares the mixed Eigen products).
-template <typename T, typename D = T>
-T SpecularLobe(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam,
-               const detail::Directions<D>& light_dir_cam, const T& shininess,
-               const ModelOptions& options) {
-  if (options.lobe == Lobe::kLambert || options.lobe == Lobe::kOrenNayar) return T(0);
-  const T n_dot_l = normal_cam.dot(light_dir_cam);
-  if (!(n_dot_l > T(0))) return T(0);
-  const LobeCosineOf<T> c = LobeCosine<T, D>(normal_cam, view_cam, light_dir_cam, n_dot_l, options);
-  if (!(c.cosine > T(0))) return T(0);
-  return LobePower(c.cosine, c.lambda, shininess, options);
-}
-
 // Oren and Nayar's qualitative diffuse factor for the facets' slope σ (radians):
 //   cos θi·(A + B·max(0, cos(φi − φr))·sin α·tan β),  α = max(θi, θr), β = min(θi, θr),
 //   A = 1 − σ²/(2(σ² + 0.33)),  B = 0.45 σ²/(σ² + 0.09),
@@ -243,20 +227,59 @@ struct LightFactors {
   T specular = T(0);
 };
 
+// One light's factors up to the lobe's power, by those rules: the diffuse factor, and where the
+// lobe is on (N·L > 0 and its cosine > 0) that cosine and λ, for LobePower to raise. Both
+// ShadingFactors (one light) and ShadingFactorsOfLights (a batch of powers) start here.
+template <typename T>
+struct FactorsBeforePower {
+  LightFactors<T> factors;  // specular still 0
+  bool lobe = false;
+  LobeCosineOf<T> lobe_cosine;
+};
+
+template <typename T, typename D = T>
+FactorsBeforePower<T> ShadingFactorsBeforePower(const Vec3T<T>& normal_cam,
+                                                const detail::Directions<D>& view_cam,
+                                                const detail::Directions<D>& light_dir_cam,
+                                                const T& shininess, const ModelOptions& options) {
+  FactorsBeforePower<T> f;
+  const T n_dot_l = normal_cam.dot(light_dir_cam);
+  if (!(n_dot_l > T(0))) return f;
+  if (options.lobe == Lobe::kOrenNayar) {
+    f.factors.diffuse = OrenNayarDiffuse<T, D>(normal_cam, view_cam, light_dir_cam, shininess);
+    return f;
+  }
+  f.factors.diffuse = n_dot_l;
+  if (options.lobe == Lobe::kLambert) return f;
+  f.lobe_cosine = LobeCosine<T, D>(normal_cam, view_cam, light_dir_cam, n_dot_l, options);
+  f.lobe = f.lobe_cosine.cosine > T(0);
+  return f;
+}
+
 template <typename T, typename D = T>
 LightFactors<T> ShadingFactors(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam,
                                const detail::Directions<D>& light_dir_cam, const T& shininess,
                                const ModelOptions& options) {
-  LightFactors<T> f;
-  const T n_dot_l = normal_cam.dot(light_dir_cam);
-  if (!(n_dot_l > T(0))) return f;
-  if (options.lobe == Lobe::kOrenNayar) {
-    f.diffuse = OrenNayarDiffuse<T, D>(normal_cam, view_cam, light_dir_cam, shininess);
-    return f;
+  FactorsBeforePower<T> f =
+      ShadingFactorsBeforePower<T, D>(normal_cam, view_cam, light_dir_cam, shininess, options);
+  if (f.lobe) {
+    f.factors.specular = LobePower(f.lobe_cosine.cosine, f.lobe_cosine.lambda, shininess, options);
   }
-  f.diffuse = n_dot_l;
-  f.specular = SpecularLobe<T, D>(normal_cam, view_cam, light_dir_cam, shininess, options);
-  return f;
+  return f.factors;
+}
+
+// The specular lobe value (R·V)^n or (N·H)^n for one light, zero where seed 003's rules say so
+// (N·L ≤ 0, or the lobe's cosine ≤ 0): ShadingFactors' specular factor. All vectors unit,
+// camera frame. The view and light may have a plain scalar type D while the normal is a Jet
+// (SpecularLobe<Jet, double>): constants then cost no derivative arithmetic (Ceres declares the
+// mixed Eigen products).
+template <typename T, typename D = T>
+T SpecularLobe(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam,
+               const detail::Directions<D>& light_dir_cam, const T& shininess,
+               const ModelOptions& options) {
+  // Oren–Nayar has no lobe; its diffuse factor need not be computed to say so.
+  if (options.lobe == Lobe::kOrenNayar) return T(0);
+  return ShadingFactors<T, D>(normal_cam, view_cam, light_dir_cam, shininess, options).specular;
 }
 
 // ShadingFactorsOfLights' buffers, kept by the caller between calls (nothing allocated per call).
@@ -268,47 +291,45 @@ struct LobeScratch {
 };
 
 // ShadingFactors for every light j < count with use(j), into out[j] (the others are left as
-// they are), at a constant shininess: the lobes' cosines first, then their powers c^n in one
-// batch (powers.h's ConstantPowers: glibc's vector exp and log, within ~1e-15 relative of
-// LobePower's scalar ones on any lobe value above 1e-6). A Jet's power carries LobePower's
-// derivative n·c^n/c·dc. Where the power is not exp(n log c) — an integer n (repeated squaring),
-// the fast approximation — and for the models without a lobe, it is ShadingFactors light by light.
+// they are), at a constant shininess: each light's factors up to the power
+// (ShadingFactorsBeforePower), then the lobes' powers c^n in one batch (powers.h's
+// ConstantPowers: glibc's vector exp and log, within about 1e-15 relative of LobePower's scalar
+// ones). A Jet's power carries LobePower's derivative n·c^n/c·dc. Where LobePower does not take
+// exp(n log c) — an integer n (repeated squaring), the fast approximation — each light's power
+// is LobePower's.
 template <typename T, typename D, typename Use>
 void ShadingFactorsOfLights(const Vec3T<T>& normal_cam, const detail::Directions<D>& view_cam,
                             const Vec3T<D>* light_dir_cam, int count, double shininess,
                             const ModelOptions& options, Use use, LobeScratch<T>& scratch,
                             LightFactors<T>* out) {
+  const T n(shininess);
   int integer = 0;
-  if (options.lobe == Lobe::kLambert || options.lobe == Lobe::kOrenNayar ||
-      options.power != PowerMode::kExact || detail::IsConstantInteger(shininess, &integer)) {
-    const T n(shininess);
-    for (int j = 0; j < count; ++j) {
-      if (use(j)) out[j] = ShadingFactors<T, D>(normal_cam, view_cam, light_dir_cam[j], n, options);
-    }
-    return;
-  }
+  // exp(n log c) is LobePower's spelling only for the exact power of a non-integer n.
+  const bool batch =
+      options.power == PowerMode::kExact && !detail::IsConstantInteger(shininess, &integer);
   scratch.cosine.clear();
   scratch.value.clear();
   scratch.light.clear();
   for (int j = 0; j < count; ++j) {
     if (!use(j)) continue;
-    LightFactors<T>& f = out[j];
-    f = LightFactors<T>();
-    const T n_dot_l = normal_cam.dot(light_dir_cam[j]);
-    if (!(n_dot_l > T(0))) continue;
-    f.diffuse = n_dot_l;
-    const T cosine =
-        LobeCosine<T, D>(normal_cam, view_cam, light_dir_cam[j], n_dot_l, options).cosine;
-    if (!(cosine > T(0))) continue;
-    scratch.cosine.push_back(cosine);
-    scratch.value.push_back(detail::ValueOf(cosine));
+    const FactorsBeforePower<T> f =
+        ShadingFactorsBeforePower<T, D>(normal_cam, view_cam, light_dir_cam[j], n, options);
+    out[j] = f.factors;
+    if (!f.lobe) continue;
+    if (!batch) {
+      out[j].specular = LobePower(f.lobe_cosine.cosine, f.lobe_cosine.lambda, n, options);
+      continue;
+    }
+    scratch.cosine.push_back(f.lobe_cosine.cosine);
+    scratch.value.push_back(detail::ValueOf(f.lobe_cosine.cosine));
     scratch.light.push_back(j);
   }
+  if (scratch.light.empty()) return;
   ConstantPowers(scratch.value.data(), scratch.value.size(), shininess, scratch.value.data());
   for (std::size_t i = 0; i < scratch.light.size(); ++i) {
     const T& c = scratch.cosine[i];
     const double power = scratch.value[i], at = detail::ValueOf(c);
-    // c^n + (c − c₀)·n·c₀^n/c₀: the value exact, the derivative's part the chain rule's.
+    // c^n + (c − c₀)·n·c₀^n/c₀: the value c₀^n, the derivative the chain rule's n·c^(n−1)·dc.
     out[scratch.light[i]].specular = T(power) + (c - T(at)) * (shininess * power / at);
   }
 }

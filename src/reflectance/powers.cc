@@ -30,15 +30,15 @@ __attribute__((target("avx2,fma"))) void PowersAvx2(const double* base, std::siz
   for (std::size_t t = 0; i + t < count; ++t) out[i + t] = tail[t];
 }
 
-}  // namespace
-
-bool ConstantPowersVectorized() {
+bool Vectorized() {
   static const bool available = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
   return available;
 }
 
+}  // namespace
+
 void ConstantPowers(const double* base, std::size_t count, double exponent, double* out) {
-  if (ConstantPowersVectorized()) {
+  if (Vectorized()) {
     PowersAvx2(base, count, exponent, out);
     return;
   }
