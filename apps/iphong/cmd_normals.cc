@@ -2,11 +2,13 @@
 // with ground truth, the angular errors (`iphong eval`, cmd_eval.cc: the same for any map).
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 
 #include "calibrate/lights.h"
 #include "core/errors.h"
+#include "core/parallel.h"
 #include "core/timing.h"
 #include "core/version.h"
 #include "integrate/frame_check.h"
@@ -297,24 +299,49 @@ void RunNormals(const NormalsCommandOptions& o) {
     }
   }
 
-  io::WriteImage(out.file("normals.exr"), result.normals);
-  io::WriteImage(out.file("normals.png"),
-                 io::NormalMapPicture(result.normals, dataset.mask, o.convention == "directx"),
-                 {16, io::Encoding::kData});
-  io::WriteImage(out.file("albedo.exr"), result.albedo);
-  io::WriteAlbedoPicture(out.file("albedo.png"), result.albedo, dataset.mask);
-  io::WriteImage(out.file("residual.exr"), result.residual);
-  {
+  // The images and pictures are encoded side by side (each file alone: the same bytes as one
+  // after another), the largest first; the first failure, in this order, is reported. An encoder
+  // per thread holds less than the decoders EstimateNormalsMemory allowed for, freed by now.
+  std::vector<std::function<void()>> writes;
+  const auto write = [&](const std::string& name, std::function<void(const std::string&)> how) {
+    writes.push_back([how = std::move(how), path = out.file(name)] { how(path); });
+  };
+  write("normals.exr", [&](const std::string& path) { io::WriteImage(path, result.normals); });
+  write("albedo.exr", [&](const std::string& path) { io::WriteImage(path, result.albedo); });
+  write("normals.png", [&](const std::string& path) {
+    io::WriteImage(path,
+                   io::NormalMapPicture(result.normals, dataset.mask, o.convention == "directx"),
+                   {16, io::Encoding::kData});
+  });
+  write("residual.exr", [&](const std::string& path) { io::WriteImage(path, result.residual); });
+  const bool specular_map = result.material_estimated && !result.specular.pixels.empty();
+  if (specular_map) {
+    write("specular.exr", [&](const std::string& path) { io::WriteImage(path, result.specular); });
+  }
+  if (!ambiguity.pixels.empty()) {
+    write("ambiguity.exr", [&](const std::string& path) { io::WriteImage(path, ambiguity); });
+  }
+  if (!result.model_map.pixels.empty()) {
+    write("model.exr", [&](const std::string& path) { io::WriteImage(path, result.model_map); });
+  }
+  write("albedo.png", [&](const std::string& path) {
+    io::WriteAlbedoPicture(path, result.albedo, dataset.mask);
+  });
+  write("residual.png", [&](const std::string& path) {
     Mask fitted = dataset.mask;  // residual −1: flagged pixels, black in the picture
     for (std::size_t p = 0; p < fitted.inside.size(); ++p)
       fitted.inside[p] = fitted.inside[p] && result.residual.pixels[p] >= 0;
-    io::WriteErrorMap(out.file("residual.png"), result.residual, fitted,
-                      io::ErrorMapScale(result.residual, fitted), "rms");
+    io::WriteErrorMap(path, result.residual, fitted, io::ErrorMapScale(result.residual, fitted),
+                      "rms");
+  });
+  if (errors) {
+    write("error.png", [&](const std::string& path) {
+      io::WriteErrorMap(
+          path, errors->error_deg, dataset.mask,
+          o.error_range > 0 ? o.error_range : io::ErrorMapScale(errors->error_deg, dataset.mask));
+    });
   }
-  const bool specular_map = result.material_estimated && !result.specular.pixels.empty();
-  if (specular_map) io::WriteImage(out.file("specular.exr"), result.specular);
-  if (!ambiguity.pixels.empty()) io::WriteImage(out.file("ambiguity.exr"), ambiguity);
-  if (!result.model_map.pixels.empty()) io::WriteImage(out.file("model.exr"), result.model_map);
+  RunTasks(writes, o.common.threads);
   if (result.material_estimated) {
     io::WriteTextFile(out.file("material.json"), EstimatedMaterialJson(result).dump(2) + "\n");
   }
@@ -322,10 +349,6 @@ void RunNormals(const NormalsCommandOptions& o) {
     io::WriteTextFile(out.file("light_intensities.txt"),
                       io::FormatTriples(estimated->estimate.light_intensities));
   }
-  if (errors)
-    io::WriteErrorMap(
-        out.file("error.png"), errors->error_deg, dataset.mask,
-        o.error_range > 0 ? o.error_range : io::ErrorMapScale(errors->error_deg, dataset.mask));
   if (near_run) WriteNearOutputs(out, *near_run, dataset, metrics, o.common);
   std::optional<io::SurfaceFiles> surface;
   integrate::IntegrateResult heights;

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
+#include <exception>
+#include <functional>
 #include <system_error>
 #include <thread>
 #include <vector>
@@ -51,6 +53,25 @@ void ParallelFor(std::size_t begin, std::size_t end, std::size_t chunk, int thre
   }
   work();
   for (auto& t : pool) t.join();
+}
+
+// Runs every task, up to `threads` at once (0 = hardware concurrency), each taken in the order
+// given by the next free thread. Every task runs even when another throws; then the exception of
+// the first task in that order that threw is rethrown.
+inline void RunTasks(const std::vector<std::function<void()>>& tasks, int threads) {
+  std::vector<std::exception_ptr> errors(tasks.size());
+  ParallelFor(0, tasks.size(), 1, threads, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      try {
+        tasks[i]();
+      } catch (...) {
+        errors[i] = std::current_exception();
+      }
+    }
+  });
+  for (const std::exception_ptr& error : errors) {
+    if (error) std::rethrow_exception(error);
+  }
 }
 
 }  // namespace iphong
