@@ -5,7 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <mutex>
 #include <stdexcept>
+
+#include "core/parallel.h"
 
 #include "io/dataset_text.h"
 #include "io/files.h"
@@ -197,13 +201,23 @@ void WriteDatasetFiles(OutputFolder& out, const std::string& prefix, const Datas
   const std::string ext = settings.extension();
   std::string names;
   const int digits = std::max<int>(3, std::to_string(k).size());
+  // The images are encoded side by side (each file alone: the same bytes as one after another);
+  // the first failure in image order is reported.
+  std::vector<std::function<void()>> writes;
+  std::mutex progress_mutex;
+  std::size_t written = 0;
   for (std::size_t j = 0; j < k; ++j) {
     std::string number = std::to_string(j + 1);
     number.insert(0, digits - number.size(), '0');
-    WriteImage(file(number + ext), *d.images[j], settings.write_options());
+    writes.push_back([&, j, path = file(number + ext)] {
+      WriteImage(path, *d.images[j], settings.write_options());
+      if (!d.progress) return;
+      const std::lock_guard<std::mutex> lock(progress_mutex);
+      d.progress(static_cast<double>(++written) / static_cast<double>(k));
+    });
     names += number + ext + "\n";
-    if (d.progress) d.progress((j + 1.0) / k);
   }
+  RunTasks(writes, d.threads);
   WriteTextFile(file("filenames.txt"), names);
   WriteTextFile(file("light_directions.txt"), FormatTriples(d.light_directions));
   WriteTextFile(file("light_intensities.txt"),
@@ -244,6 +258,7 @@ void WriteRenderOutput(OutputFolder& out, const std::string& prefix, const rende
     d.normal_gt = &output.normal_cam;
     d.material_json = material;
     d.progress = progress;
+    d.threads = options.threads;
     WriteDatasetFiles(out, prefix, d, settings);
   } else {
     WriteImage(file("image" + settings.extension()), output.image, settings.write_options());

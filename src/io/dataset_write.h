@@ -39,7 +39,9 @@ struct DatasetToWrite {
   const Mask* mask = nullptr;            // nullptr: the whole image
   const ImageF* normal_gt = nullptr;     // nullptr: no ground truth
   std::string material_json;             // "" = none
-  std::function<void(double)> progress;  // the fraction of images written, when set
+  // The fraction of images written, when set; called from the writing threads, one at a time.
+  std::function<void(double)> progress;
+  int threads = 0;  // images encoded at once (0: one per core)
 };
 
 // Writes 001.<ext> ... (as `settings` say), filenames.txt, light_directions.txt,
