@@ -115,12 +115,13 @@ Progress::Progress(std::string stage, ProgressMode mode, std::string unit, doubl
       total_(total),
       bar_(mode != ProgressMode::kNever && own_stderr_tty),
       lines_(mode != ProgressMode::kNever && !own_stderr_tty),
-      line_interval_(mode == ProgressMode::kAlways ? 2 : 10),
+      always_(mode == ProgressMode::kAlways),
+      line_interval_(always_ ? 2 : 10),
       start_(std::chrono::steady_clock::now()),
       last_(start_) {}
 
 Progress::~Progress() {
-  if (!shown_) return;
+  if (!shown_ && !(lines_ && always_)) return;  // an always-shown stage closes even unseen
   if (bar_) {
     std::fprintf(Err(), "\r\033[K");
   } else {
@@ -138,7 +139,9 @@ void Progress::Update(double fraction) {
   const auto now = std::chrono::steady_clock::now();
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   const double since = std::chrono::duration<double>(now - last_).count();
-  if (bar_ ? elapsed < 1 || since < 0.1 : since < line_interval_) return;
+  // In a log, --progress always shows a stage's first update at once, so a short stage is seen too.
+  const bool first_line = lines_ && always_ && !shown_;
+  if (!first_line && (bar_ ? elapsed < 1 || since < 0.1 : since < line_interval_)) return;
   last_ = now;
   shown_ = true;
   fraction = std::min(std::max(fraction, 0.0), 1.0);

@@ -30,16 +30,15 @@ bool Interrupted();
 bool ErrIsTerminal();                   // progress is shown only on a terminal
 void Warn(const std::string& message);  // "iphong: warning: MESSAGE"
 
-// One stage's progress on one stderr line, rewritten in place:
+// One stage's progress on stderr. On a terminal, one line rewritten in place once the stage has
+// run for a second, at most ten times a second, cleared when the stage ends:
 //   "fit: 61% (22816/37068 pixels), 1.4 s, about 0.9 s left"
-// Shown only when stderr is a terminal and the run is not --quiet or --json, and only once the
-// stage has run for a second (short stages stay silent). Update may be called from any thread;
-// the line is redrawn at most ten times a second and cleared when the stage ends.
-// How a long stage shows its progress on stderr.
+// Otherwise whole lines "iphong: fit: 61% (...), 14 s, about 9 s left" and "iphong: fit: done,
+// 23 s", as the mode says. Update may be called from any thread.
 enum class ProgressMode {
   kNever,
   kAuto,    // a bar on a terminal; otherwise plain lines every 10 s once a stage passes 10 s
-  kAlways,  // a bar on a terminal; otherwise plain lines every 2 s
+  kAlways,  // a bar on a terminal; otherwise a line at a stage's start, then every 2 s
 };
 
 class Progress {
@@ -55,6 +54,7 @@ class Progress {
   std::string stage_, unit_;
   double total_;
   bool bar_ = false, lines_ = false;  // a bar on a terminal, or plain lines in a log
+  bool always_ = false;               // --progress always: every stage is shown, however short
   double line_interval_ = 10;         // seconds between plain lines (and before the first)
   bool shown_ = false;
   std::chrono::steady_clock::time_point start_, last_;

@@ -1,6 +1,6 @@
 """Progress in a log: a run piped to a file (not a terminal) printed nothing until the end. With
---progress always it prints plain lines (stage, percent, elapsed, estimate) every 2 s and a
-closing line per stage; auto does so only past 10 s (so short runs stay quiet); never and --quiet
+--progress always it prints plain lines (stage, percent, elapsed, estimate): a stage's first at
+once, then every 2 s, and a closing line per stage; auto does so only past 10 s (so short runs stay quiet); never and --quiet
 print none."""
 import json
 import re
@@ -37,6 +37,22 @@ def test_progress_always_prints_plain_lines_in_a_log(scene, tmp_path):
     assert any(DONE.match(line) for line in lines), err
     assert all(LINE.match(line) or DONE.match(line) for line in lines), err  # nothing else
     assert "\r" not in err and "\033" not in err  # no terminal codes in a log
+
+
+def test_progress_always_shows_a_stage_however_short(tmp_path):
+    # A stage shorter than the 2 s between lines once printed nothing at all.
+    scene = tmp_path / "tiny.json"
+    scene.write_text(json.dumps({
+        "width": 32, "height": 32, "lights": [{"type": "hemisphere", "count": 3}],
+        "objects": [{"shape": "sphere", "radius": 0.8}], "output": {"format": "png"}}))
+    code, _, err = run("render", scene, "-o", tmp_path / "out", "--per-light", "--progress",
+                       "always")
+    assert code == 0, err
+    lines = err.splitlines()
+    for stage in ("render", "write"):
+        assert any(LINE.match(line) and f" {stage}: " in line for line in lines), err
+        assert sum(DONE.match(line) is not None and f" {stage}: " in line for line in lines) == 1
+    assert all(LINE.match(line) or DONE.match(line) for line in lines), err
 
 
 @pytest.mark.parametrize("flags", [["--progress", "never"], ["--quiet"], []])
