@@ -303,7 +303,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   // after another), the largest first; the first failure, in this order, is reported. An encoder
   // per thread holds less than the decoders EstimateNormalsMemory allowed for, freed by now.
   std::vector<std::function<void()>> writes;
-  const auto write = [&](const std::string& name, std::function<void(const std::string&)> how) {
+  const auto write = [&](const std::string& name, auto how) {
     writes.push_back([how = std::move(how), path = out.file(name)] { how(path); });
   };
   write("normals.exr", [&](const std::string& path) { io::WriteImage(path, result.normals); });

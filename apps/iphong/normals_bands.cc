@@ -3,7 +3,9 @@
 // outputs are ever whole in memory.
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <memory>
+#include <vector>
 
 #include "core/errors.h"
 #include "core/parallel.h"
@@ -171,13 +173,16 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
       }
     }
     const Mask mask = BandMask(dataset.mask, y0, y0 + rows);
-    normals->WriteRows(band.normals);
-    picture->WriteRows(io::NormalMapPicture(band.normals, mask, directx));
-    albedo->WriteRows(band.albedo);
-    residual->WriteRows(band.residual);
-    if (specular) specular->WriteRows(band.specular);
+    // Each file's rows are encoded side by side, the 16-bit picture (the slowest) first, as the
+    // in-memory run writes its files; the next band is solved once all are written.
+    std::vector<std::function<void()>> rows_of = {
+        [&] { picture->WriteRows(io::NormalMapPicture(band.normals, mask, directx)); },
+        [&] { normals->WriteRows(band.normals); }, [&] { albedo->WriteRows(band.albedo); },
+        [&] { residual->WriteRows(band.residual); }};
+    if (specular) rows_of.push_back([&] { specular->WriteRows(band.specular); });
+    if (model) rows_of.push_back([&] { model->WriteRows(band.model_map); });
+    RunTasks(rows_of, o.common.threads);
     if (model) {
-      model->WriteRows(band.model_map);
       for (float v : band.model_map.pixels) {
         specular_pixels += v == 1;
         chosen_pixels += v >= 0;
@@ -237,8 +242,12 @@ void RunNormalsInBands(const NormalsCommandOptions& o, io::OutputFolder& out,
       frame = CheckLightFrame(o, dataset, small, small_mask);  // --strict: throws
     }
   }
-  for (auto* w : {&normals, &picture, &albedo, &residual, &specular, &model})
-    if (*w) (*w)->Finish();
+  {
+    std::vector<std::function<void()>> finish;  // each file checked as written, side by side
+    for (auto* w : {&picture, &normals, &albedo, &residual, &specular, &model})
+      if (*w) finish.push_back([w] { (*w)->Finish(); });
+    RunTasks(finish, o.common.threads);
+  }
 
   // albedo.png from the albedo just written, scaled as WriteAlbedoPicture scales (its 99th
   // percentile to 0.8), the percentile taken over every 64th pixel.
