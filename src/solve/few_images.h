@@ -37,13 +37,7 @@ struct FewImageOptions {
   // Integrability is what a surface must satisfy; smoothness is only a preference, and a
   // curved surface pays for it, so it is the weaker: where one light leaves a pixel a cone of
   // normals, integrability and the data fix it, and smoothness decides only what nothing else
-  // does (no light). Mean error on the demo sphere (lights 1+2 | 6+7 | the same with σ = 0.005
-  // noise | image 1 alone | image 6 alone):
-  //   smoothness 0.5, integrability 0.2 (before): 0.38 | 1.41 | 0.48 | 1.44 | 2.33 | 6.40°
-  //   0.2, 0.2:                                   0.28 | 0.99 | 0.56 | 1.13 | 1.61 | 4.23°
-  //   0.5, 1.0:                                   0.31 | 0.84 | 0.39 | 0.86 | 1.06 | 3.21°
-  //   0.2, 1.0 (these):                           0.24 | 0.51 | 0.55 | 0.66 | 0.43 | 1.72°
-  // Less smoothing passes more noise: the noisy medians are 0.35° here against 0.2° with 0.5.
+  // does (no light). The pairs measured: docs/guides/normals.md.
   double smoothness_weight = 0.2;
   double integrability_weight = 1.0;
   double boundary_weight = 2.0;

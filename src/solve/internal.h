@@ -40,11 +40,8 @@ struct CoefficientPair {
 // least squares scales that tail up to fit interreflections and noise: ks of 10⁶ to 10²⁶ came
 // out on every DiLiGenT object (a tenth of the ball's pixels above 10), and a tail that steep
 // pulls the normal. The ridge is one observation at 3 % of the peak: where a light shows the
-// lobe above that, ks is as before; where none does, ks stays small. Measured on the seven
-// DiLiGenT runs (mean of the seven, degrees; per-pixel test at 2 SE): 6.12 without, 6.06 at
-// 10⁻⁴, 6.02 at 10⁻³, 6.14 at 10⁻² (cow loses 0.6° as its metallic lobe's real ks is shrunk)
-// and 6.32 at 10⁻¹; the largest ks anywhere falls from 10²⁶ to 44 at 10⁻⁴ and 17 at 10⁻³ (harvest;
-// the ball's 8).
+// lobe above that, ks is as before; where none does, ks stays small (the weights measured:
+// docs/accuracy.md).
 constexpr double kKsRidge = 1e-3;
 
 template <typename T>

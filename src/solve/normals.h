@@ -44,18 +44,15 @@ struct NormalOptions {
   double saturation = 0.995;
   // Shadow censoring: an observation darker than the model by more than this fraction of the
   // pixel's brightness costs no more (internal::CensoredCost). Noise is ~1% of the brightness,
-  // a cast shadow removes the whole direct term: 0.1 lies between. On the seven DiLiGenT runs of
-  // bench/accuracy.py the mean error is 7.05° at 0.1, 7.47° at 0.05 and 7.23° at 0.2.
+  // a cast shadow removes the whole direct term: 0.1 lies between (measured: docs/accuracy.md).
   double shadow_threshold = 0.1;
   int irls_rounds = 4;  // censoring rounds of the local fit
   // Candidate normals of the global search (search.h): ~1000 spaces them 4.5° apart, finer than
   // the narrowest lobe the choice offers is wide.
   int search_candidates = 1000;
   // Pixels the model choice scores. Its decisions are paired differences of held-out costs
-  // whose standard error falls as 1/√sample: on the seven DiLiGenT runs (an even stride then)
-  // 300 left ball's lobe to a coin toss (Blinn-Phong 753 or Phong 201: 1.90° or 2.07°), 600 and
-  // 1000 gave means of 6.16° and 6.17° against 6.25° at 300 (the model choice on
-  // full-resolution cat: 1.3 s at 600, 2.1 s at 1000).
+  // whose standard error falls as 1/√sample; 600 is where more stopped changing the choice on
+  // DiLiGenT, at about half the time of 1000 (docs/accuracy.md).
   int model_sample = 600;
   // Pixels the whole-object decisions see (PlanSampleIndices): the model choice scores
   // model_sample of them and the ambient estimate is a quartile over them, so 2^17 costs nothing
