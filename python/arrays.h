@@ -5,6 +5,7 @@
 #pragma once
 
 #include <pybind11/numpy.h>
+#include <pybind11/stl.h>
 
 #include <cmath>
 #include <cstring>
@@ -43,6 +44,9 @@ inline py::array_t<double> ToArray(const std::vector<Vec3d>& rows) {
     for (int c = 0; c < 3; ++c) out[3 * i + c] = rows[i][c];
   return array;
 }
+
+// One RGB or xyz triple as a Python list of three floats.
+inline py::list ToList(const Vec3d& v) { return py::cast(std::vector<double>{v[0], v[1], v[2]}); }
 
 inline py::array_t<float> Stack(const std::vector<ImageF>& images) {
   if (images.empty()) return py::array_t<float>(std::vector<py::ssize_t>{0, 0, 0, 3});

@@ -1,5 +1,4 @@
 #include "io/dataset_write.h"
-#include "core/version.h"
 
 #include <nlohmann/json.hpp>
 
@@ -10,7 +9,7 @@
 #include <stdexcept>
 
 #include "core/parallel.h"
-
+#include "core/version.h"
 #include "io/dataset_text.h"
 #include "io/files.h"
 #include "io/image_io.h"
