@@ -14,6 +14,9 @@ from cli import IPHONG, ROOT, binary_available, run
 DATA = pathlib.Path(os.environ.get("IPHONG_DATA_DIR", ROOT.parent / "shared" / "data"))
 UW = DATA / "uw"
 CROP_CAT = DATA / "diligent-crop8" / "cat"
+# What these tests compare is how files are read, which every solve depends on alike: the fastest
+# one (Lambert at distant lights) shows a light, an intensity or a pixel read differently.
+LAMBERT = ("--model", "lambert", "--light-distance", "inf")
 
 pytestmark = [
     pytest.mark.skipif(not binary_available(), reason=f"no iphong binary at {IPHONG}"),
@@ -53,22 +56,23 @@ def uw_as_diligent(obj, folder, order):
 
 def test_a_camera_beside_light_directions_is_said_not_read(tmp_path):
     plain = uw_as_diligent("cat", tmp_path / "plain", range(12))
-    normals(plain, tmp_path / "plain-out")
+    normals(plain, tmp_path / "plain-out", *LAMBERT)
     with_camera = uw_as_diligent("cat", tmp_path / "camera", range(12))
     (with_camera / "camera.json").write_text('{"fx": 800, "fy": 800, "cx": 256, "cy": 256}\n')
-    code, _, stderr = run("normals", with_camera, "-o", tmp_path / "camera-out", timeout=300)
+    code, _, stderr = run("normals", with_camera, "-o", tmp_path / "camera-out", *LAMBERT,
+                          timeout=300)
     assert code == 0, stderr
     assert "camera.json: not read: a camera is read with light_positions.txt" in stderr
     assert "(V = (0, 0, 1), an orthographic view)" in stderr
     assert angle_between(tmp_path / "plain-out" / "normals.exr",
                          tmp_path / "camera-out" / "normals.exr") < 1e-6
     # Without the file, no such line.
-    code, _, stderr = run("normals", plain, "-o", tmp_path / "again", timeout=300)
+    code, _, stderr = run("normals", plain, "-o", tmp_path / "again", *LAMBERT, timeout=300)
     assert code == 0 and "camera.json" not in stderr, stderr
 
 
 def test_uw_cat_runs_as_it_is_and_says_what_it_read(tmp_path):
-    stdout, metrics = normals(UW / "cat", tmp_path / "out")
+    stdout, metrics = normals(UW / "cat", tmp_path / "out", *LAMBERT)
     line = stdout.splitlines()[0]
     assert "12 images (folder layout, natural order: cat.0.tga ... cat.11.tga)" in line
     assert "lights.txt (count + directions)" in line
@@ -80,11 +84,11 @@ def test_uw_cat_runs_as_it_is_and_says_what_it_read(tmp_path):
 
     # The same data in the DiLiGenT layout gives the same normals; in ls order it does not.
     same = uw_as_diligent("cat", tmp_path / "listed", range(12))
-    normals(same, tmp_path / "listed-out")
+    normals(same, tmp_path / "listed-out", *LAMBERT)
     assert angle_between(tmp_path / "out" / "normals.exr", tmp_path / "listed-out" / "normals.exr") \
         < 1e-6
     ls_order = uw_as_diligent("cat", tmp_path / "ls", sorted(range(12), key=str))
-    normals(ls_order, tmp_path / "ls-out")
+    normals(ls_order, tmp_path / "ls-out", *LAMBERT)
     assert angle_between(tmp_path / "out" / "normals.exr", tmp_path / "ls-out" / "normals.exr") > 10
 
 
@@ -116,7 +120,7 @@ def test_uw_archive_as_shipped_runs_as_it_is(tmp_path, listed):
     albedo picture is not a 13th photo, the companions are named as not read, and the normals
     are those of UW's cat folder."""
     folder = uw_as_shipped(tmp_path, listed=listed)
-    stdout, metrics = normals(folder, tmp_path / "out")
+    stdout, metrics = normals(folder, tmp_path / "out", *LAMBERT)
     line = stdout.splitlines()[0]
     if listed:
         assert f"12 images (listed layout, {folder.parent / 'buddha.txt'}: " in line
@@ -124,7 +128,7 @@ def test_uw_archive_as_shipped_runs_as_it_is(tmp_path, listed):
         assert "12 images (folder layout, natural order: buddha.0.tga ... buddha.11.tga)" in line
     assert "mask buddha.mask.tga" in line
     assert line.endswith("not read: buddha.albedo.tga, buddha.depths.dat, buddha.normals.dat")
-    normals(UW / "cat", tmp_path / "cat")
+    normals(UW / "cat", tmp_path / "cat", *LAMBERT)
     assert angle_between(tmp_path / "out" / "normals.exr", tmp_path / "cat" / "normals.exr") < 1e-6
 
 
@@ -132,7 +136,7 @@ def test_images_list_names_the_photos_and_a_count_mismatch_says_how(tmp_path):
     folder = uw_as_shipped(tmp_path, listed=False)
     listing = tmp_path / "order.txt"  # the user's own list, outside the data folder
     listing.write_text("".join(f"buddha.{i}.tga\n" for i in range(12)))
-    stdout, _ = normals(folder, tmp_path / "out", "--images", listing)
+    stdout, _ = normals(folder, tmp_path / "out", "--images", listing, *LAMBERT)
     assert f"listed layout, {listing}: buddha.0.tga ... buddha.11.tga" in stdout
     listing.write_text("12\n" + "".join(f"buddha.{i}.tga\n" for i in range(11)))
     code, _, err = run("normals", folder, "-o", tmp_path / "bad", "--images", listing)
@@ -147,7 +151,7 @@ def test_images_list_names_the_photos_and_a_count_mismatch_says_how(tmp_path):
 
 def crop_cat_run(tmp_path):
     out = tmp_path / "diligent-out"
-    _, metrics = normals(CROP_CAT, out)
+    _, metrics = normals(CROP_CAT, out, *LAMBERT)
     return out, metrics
 
 
@@ -156,7 +160,8 @@ def test_rti_lp_plain_folder_and_alicevision_json_match_the_diligent_layout(tmp_
     names = (CROP_CAT / "filenames.txt").read_text().split()
     directions = [line.split() for line in (CROP_CAT / "light_directions.txt").read_text().splitlines()]
     intensities = [line.split() for line in (CROP_CAT / "light_intensities.txt").read_text().splitlines()]
-    common = ["--intensities", CROP_CAT / "light_intensities.txt", "--mask", CROP_CAT / "mask.png"]
+    common = ["--intensities", CROP_CAT / "light_intensities.txt", "--mask", CROP_CAT / "mask.png",
+              *LAMBERT]
 
     # RTI: images renamed as a camera names them, the .lp in RTIBuilder's assembly-files/ with
     # the absolute Windows paths of the machine it ran on.
@@ -190,21 +195,21 @@ def test_rti_lp_plain_folder_and_alicevision_json_match_the_diligent_layout(tmp_
                          for i, (d, e) in enumerate(zip(directions, intensities))]}
     (tmp_path / "lights.json").write_text(json.dumps(lights))
     normals(plain, tmp_path / "json-out", "--lights", tmp_path / "lights.json", "--mask",
-            CROP_CAT / "mask.png")
+            CROP_CAT / "mask.png", *LAMBERT)
     assert angle_between(reference / "normals.exr", tmp_path / "json-out" / "normals.exr") < 1e-5
 
 
 def test_mask_names_people_use(tmp_path):
     base = uw_as_diligent("cat", tmp_path / "cat", range(12))
-    _, with_mask = normals(base, tmp_path / "a")
+    _, with_mask = normals(base, tmp_path / "a", *LAMBERT)
     for name in ["mask.png", "cat.mask.tga", "cat_mask.tga"]:
         current = next(p for p in base.iterdir() if "mask" in p.name)
         current.rename(base / name)
-        stdout, metrics = normals(base, tmp_path / name)
+        stdout, metrics = normals(base, tmp_path / name, *LAMBERT)
         assert f"mask {name}" in stdout
         assert metrics["pixels"] == with_mask["pixels"] < 512 * 340 / 2
     next(p for p in base.iterdir() if "mask" in p.name).unlink()
-    stdout, metrics = normals(base, tmp_path / "none")
+    stdout, metrics = normals(base, tmp_path / "none", *LAMBERT)
     assert "mask none (the whole image)" in stdout and metrics["pixels"] == 512 * 340
 
 
@@ -213,7 +218,7 @@ def test_masks_as_photo_editors_save_them_and_commented_light_files(tmp_path):
     with '#' comments (numpy.savetxt's header) read as the DiLiGenT files do."""
     names = (CROP_CAT / "filenames.txt").read_text().split()
     reference = tmp_path / "reference"
-    _, expected = normals(CROP_CAT, reference, "--model", "lambert")
+    _, expected = normals(CROP_CAT, reference, *LAMBERT)
     folder = tmp_path / "cat"
     folder.mkdir()
     for name in names:
@@ -225,7 +230,7 @@ def test_masks_as_photo_editors_save_them_and_commented_light_files(tmp_path):
     subprocess.run(["oiiotool", CROP_CAT / names[0], "--ch", "R,G,B", CROP_CAT / "mask.png",
                     "--ch", "0", "--chappend", "--chnames", "R,G,B,A", "-d", "uint8", "-o",
                     folder / "mask.png"], check=True)
-    stdout, cutout = normals(folder, tmp_path / "cutout", "--model", "lambert")
+    stdout, cutout = normals(folder, tmp_path / "cutout", *LAMBERT)
     assert "mask mask.png (its alpha channel: transparent = background)" in stdout
     assert cutout["pixels"] == expected["pixels"]
     assert angle_between(reference / "normals.exr", tmp_path / "cutout" / "normals.exr") < 1e-6
@@ -233,7 +238,7 @@ def test_masks_as_photo_editors_save_them_and_commented_light_files(tmp_path):
     (folder / "mask.png").unlink()
     subprocess.run(["oiiotool", CROP_CAT / "mask.png", "-d", "uint8", "-o", folder / "mask.jpg"],
                    check=True)
-    stdout, jpeg = normals(folder, tmp_path / "jpeg", "--model", "lambert", "--mask",
+    stdout, jpeg = normals(folder, tmp_path / "jpeg", *LAMBERT, "--mask",
                            folder / "mask.jpg")
     assert "(above half its largest value: lossy compression" in stdout
     assert jpeg["pixels"] == pytest.approx(expected["pixels"], abs=expected["pixels"] * 0.002)
@@ -249,22 +254,22 @@ def test_an_intensity_file_a_line_off_is_named_and_the_right_one_is_not(tmp_path
         link(CROP_CAT / name, folder / name)
     lines = (CROP_CAT / "light_intensities.txt").read_text().split("\n")[:len(names)]
     (folder / "light_intensities.txt").write_text("\n".join([lines[-1]] + lines[:-1]) + "\n")
-    code, _, stderr = run("normals", folder, "-o", tmp_path / "off", "--model", "lambert")
+    code, _, stderr = run("normals", folder, "-o", tmp_path / "off", *LAMBERT)
     assert code == 0, stderr
     assert ("light_intensities.txt: the images' brightness follows their lights' directions "
             "better with these intensities read 1 line further down (image 1 on line 2) than "
             "as listed") in stderr
-    code, _, stderr = run("normals", CROP_CAT, "-o", tmp_path / "right", "--model", "lambert")
+    code, _, stderr = run("normals", CROP_CAT, "-o", tmp_path / "right", *LAMBERT)
     assert code == 0, stderr
     assert "light_intensities.txt" not in stderr
 
 
 def test_downscale_and_crop_keep_the_error(tmp_path):
     _, full = crop_cat_run(tmp_path)
-    _, half = normals(CROP_CAT, tmp_path / "half", "--downscale", "2")
+    _, half = normals(CROP_CAT, tmp_path / "half", "--downscale", "2", *LAMBERT)
     assert half["input"]["size"] == [148, 160] and half["input"]["file_size"] == [296, 320]
     assert half["mean_angular_error_deg"] == pytest.approx(full["mean_angular_error_deg"], abs=1.0)
-    stdout, cut = normals(CROP_CAT, tmp_path / "cut", "--crop", "0,0,296,160")  # the top half
+    stdout, cut = normals(CROP_CAT, tmp_path / "cut", "--crop", "0,0,296,160", *LAMBERT)  # top half
     assert "296x320 read as 296x160" in stdout
     assert cut["pixels"] < full["pixels"] and cut["evaluated_pixels"] == cut["pixels"]
     assert cut["mean_angular_error_deg"] == pytest.approx(full["mean_angular_error_deg"], abs=2.0)
@@ -285,7 +290,7 @@ def test_eval_reads_png_normal_maps_in_both_conventions(tmp_path):
     exr = None
     for convention in ["opengl", "directx"]:
         out = tmp_path / convention
-        _, metrics = normals(CROP_CAT, out, "--normal-map-convention", convention)
+        _, metrics = normals(CROP_CAT, out, "--normal-map-convention", convention, *LAMBERT)
         exr = exr or metrics["mean_angular_error_deg"]
         code, stdout, stderr = run("eval", out / "normals.png", CROP_CAT,
                                    "--normal-map-convention", convention)
