@@ -12,6 +12,8 @@ packages=(
   libcli11-dev nlohmann-json3-dev libopenmesh-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-pytest
+  # The test command runs pytest's files on both cores (pytest -n 2).
+  python3-pytest-xdist
   # iphong.dask: normals on chunked arrays and many captures, locally or on a cluster.
   python3-dask python3-distributed
   # The relighting viewer's test renders its WebGL page headless (SwiftShader, no GPU needed).
