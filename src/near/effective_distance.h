@@ -78,9 +78,8 @@ struct EffectiveDistanceOptions {
   // Near passes after the distant solve, until the normals' mean change is under tolerance_deg,
   // or the lights as the new surface's points see them have moved by less than that
   // (internal::LightsMovedDeg): the next pass would refit every pixel under the lights it has
-  // already been fitted under, to within the tolerance. On DiLiGenT (D of 12-24 object sizes)
-  // every object's error was the same to 0.02° after one pass as after five; a tenth of a degree
-  // is under any photograph's accuracy.
+  // already been fitted under, to within the tolerance. A tenth of a degree is under any
+  // photograph's accuracy (docs/guides/near-lights.md: how many passes captures take).
   int max_passes = 3;
   double tolerance_deg = 0.1;
   // A chosen D and its centre are chosen again this many times at most on the surface the

@@ -57,9 +57,9 @@ struct NearOptions {
   double distance = 0;
   // With a distance given the surface's mean distance stays within this factor of it: the
   // images refine the distance, they do not replace it. A ring of lights in the camera's plane
-  // is ambiguous there (lights on a cone round the axis fit a flatter surface nearer as well:
-  // under noise σ 0.002 a sphere at 466 mm walked to 190 mm, 17° off). A distance from the
-  // lights' layout (the object's centre) bounds it to a factor of 2.
+  // is ambiguous there: lights on a cone round the axis fit a flatter surface nearer as well
+  // (docs/guides/near-lights.md). A distance from the lights' layout (the object's centre)
+  // bounds it to a factor of 2.
   double distance_range = 1.25;
   int max_passes = 8;           // the full solve and the refining passes after Woodham's
   int woodham_passes = 2;       // before the full solve (more while they move); 0: straight to it

@@ -15,9 +15,8 @@ struct PreviewOptions {
   const ImageF* texture = nullptr;
   // Triangles steeper than this from the view axis (a height map's silhouette walls) are left
   // out of the picture: at a silhouette each pixel's height depends on how far its centre lies
-  // from the true outline, and the oblique view shows that staircase as a row of spikes. 80°
-  // removes the spikes of the demo's sphere and keeps every part of DiLiGenT's and UW's cats
-  // (75° already drops the UW cat's steep flanks). The mesh files keep them. 90 keeps all.
+  // from the true outline, and the oblique view shows that staircase as a row of spikes
+  // (docs/guides/heights-and-meshes.md: why 80°). The mesh files keep them; 90 keeps all.
   double max_wall_deg = 80;
   int threads = 0;
 };

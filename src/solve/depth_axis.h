@@ -4,10 +4,8 @@
 // normals Tᵀn. A visible surface faces the camera, so under the right frame the unconstrained
 // least-squares normals have n_z > 0 almost everywhere; a file whose depth axis is its x or y (a
 // dome described with z up, its y toward the camera) gives normals of which about half face away.
-// Measured (the check's own sample): 0.0–0.03 % facing away on DiLiGenT ball, cat, cow, harvest,
-// pot1, UW cat and gray and the rendered bunny; 40–59 % with the file's x or y as its depth axis,
-// 0.0 % along that axis; UW's chrome ball, a mirror no Lambertian fit describes, 38 % as given and
-// 34 % at best otherwise. The readings that keep z (y down, x mirrored, x and y swapped)
+// The shares measured on real captures as given and with their axes exchanged:
+// docs/troubleshooting.md. The readings that keep z (y down, x mirrored, x and y swapped)
 // are the normal field's frame check (integrate/frame_check.h); z negated is said by the light
 // file's own check (most lights behind the object).
 #pragma once

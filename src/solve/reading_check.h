@@ -26,11 +26,8 @@
 
 namespace iphong::solve {
 
-// The re-reading is taken for the right one beyond this many paired standard errors. Measured:
-// real photos read as linear (DiLiGenT's five 8-bit crops and 16-bit cat, UW cat and gray) have
-// the sRGB reading 9.6–61 standard errors less likely; the same photos put through the curve
-// 6.5–75 more likely; numpy renders (matte and glossy, Phong and GGX) −30 to −416 linear, +17 to
-// +300 through the curve.
+// The re-reading is taken for the right one beyond this many paired standard errors: real
+// captures sit far on either side of it (docs/troubleshooting.md gives the margins measured).
 constexpr double kReadingStandardErrors = 3;
 
 struct ReadingComparison {
