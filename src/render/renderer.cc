@@ -10,12 +10,14 @@
 #include "core/timing.h"
 #include "reflectance/shade.h"
 #include "render/rasterizer.h"
+#include "render/shadow_map_internal.h"
 
 namespace iphong::render {
 namespace {
 
 using geometry::Camera;
 using geometry::CameraType;
+using internal::ShadowMap;
 using reflectance::Light;
 using reflectance::LightType;
 using reflectance::Material;
@@ -44,73 +46,6 @@ Vec3d Albedo(const SceneObject& object, double u, double v) {
   if (object.albedo_texture.pixels.empty()) return object.material.kd;
   return object.material.kd.cwiseProduct(SampleTexture(object.albedo_texture, u, v));
 }
-
-// A rotation whose rows are camera axes with +z along `toward_viewer`.
-Eigen::Matrix3d LookRotation(const Vec3d& toward_viewer) {
-  const Vec3d z = toward_viewer.normalized();
-  const Vec3d up = std::abs(z.y()) < 0.9 ? Vec3d(0, 1, 0) : Vec3d(1, 0, 0);
-  const Vec3d x = up.cross(z).normalized();
-  const Vec3d y = z.cross(x);
-  Eigen::Matrix3d r;
-  r.row(0) = x.transpose();
-  r.row(1) = y.transpose();
-  r.row(2) = z.transpose();
-  return r;
-}
-
-// Depth as seen from one light; a point is lit when it is not farther than the stored depth.
-class ShadowMap {
- public:
-  ShadowMap(const Light& light, const std::vector<RasterItem>& items, const Vec3d& scene_center,
-            double scene_radius, const RenderOptions& options) {
-    const int size = options.shadow_map_size;
-    if (light.type == LightType::kDirectional) {
-      camera_ = Camera::Orthographic(size, size, 2.1 * scene_radius);
-      camera_.rotation = LookRotation(light.direction_cam);
-      camera_.center = scene_center;
-      texel_ = camera_.pixel_size();
-    } else {
-      const Vec3d offset = light.position_cam - scene_center;
-      const double distance = offset.norm();
-      if (!(distance > 1.05 * scene_radius)) {
-        throw std::invalid_argument(
-            "shadows need every point light outside the scene's bounding sphere");
-      }
-      const double half_angle = std::asin(scene_radius / distance) * 1.05;
-      camera_.type = CameraType::kPerspective;
-      camera_.width = camera_.height = size;
-      camera_.fx = camera_.fy = 0.5 * size / std::tan(half_angle);
-      camera_.cx = camera_.cy = 0.5 * size;
-      camera_.rotation = LookRotation(offset);
-      camera_.center = light.position_cam;
-      perspective_ = true;
-    }
-    RasterOptions raster;
-    raster.depth_only = true;
-    raster.threads = options.threads;
-    depth_ = internal::RasterizeValidatedMeshes(items, camera_, raster).depth;
-    bias_texels_ = options.shadow_bias_texels;
-  }
-
-  bool Lit(const Vec3d& point, double n_dot_l) const {
-    const Vec3d s = camera_.Project(point);
-    // Compared in double first: a point far outside (or NaN) must not reach an int cast.
-    if (!(s.x() >= 0 && s.y() >= 0 && s.x() < camera_.width && s.y() < camera_.height)) return true;
-    const int col = static_cast<int>(s.x()), row = static_cast<int>(s.y());
-    const float stored = depth_[static_cast<std::size_t>(row) * camera_.width + col];
-    // Slope-scaled bias: a surface seen at a grazing angle spans many depths within one texel.
-    const double slope = std::sqrt(std::max(0.0, 1 - n_dot_l * n_dot_l)) / std::max(n_dot_l, 0.1);
-    const double texel = perspective_ ? s.z() / camera_.fx : texel_;  // footprint at that depth
-    return s.z() <= stored + bias_texels_ * texel * (1 + slope);
-  }
-
- private:
-  Camera camera_;
-  std::vector<float> depth_;
-  double texel_ = 0;
-  double bias_texels_ = 1.5;
-  bool perspective_ = false;
-};
 
 // Evaluates ambient + the selected lights (all, or only `only_light`) at one surface point. The
 // per-pixel path runs the shared model in float (the image is float; it halves the cost of pow);
