@@ -21,6 +21,12 @@ struct OutputError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A bad input: throws std::runtime_error "SOURCE:LINE: message" (line 0: "SOURCE: message").
+[[noreturn]] inline void FailInput(const std::string& source, const std::string& message,
+                                   int line = 0) {
+  throw std::runtime_error(source + (line > 0 ? ":" + std::to_string(line) : "") + ": " + message);
+}
+
 // Messages from libraries may span lines (OpenImageIO's do) and may quote bytes of a broken
 // input; iphong prints one line of valid UTF-8 per error: control characters become spaces,
 // runs of spaces one, bytes that are not UTF-8 '?'.

@@ -6,6 +6,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "core/errors.h"
 #include "io/dataset_text.h"
 #include "io/files.h"
 #include "io/image_list.h"
@@ -15,10 +16,6 @@ namespace iphong::io {
 namespace fs = std::filesystem;
 namespace {
 
-[[noreturn]] void Fail(const fs::path& file, const std::string& message) {
-  throw std::runtime_error(file.string() + ": " + message);
-}
-
 std::string Lower(std::string text) {
   for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return text;
@@ -26,11 +23,6 @@ std::string Lower(std::string text) {
 
 // Present under that name: a FIFO or a folder named like a light file is then refused by its
 // reader, not skipped as if absent.
-bool Exists(const fs::path& path) {
-  std::error_code error;
-  return fs::exists(path, error);
-}
-
 // The regular files of a folder, in natural order. Hidden files (iphong's staging and manifest
 // among them) are not part of a capture.
 std::vector<std::string> FolderFiles(const fs::path& dir) {
@@ -42,9 +34,10 @@ std::vector<std::string> FolderFiles(const fs::path& dir) {
     std::error_code status_error;
     if (!it->is_regular_file(status_error)) continue;
     names.push_back(name);
-    if (names.size() > 1000000) Fail(dir, "holds more than a million files; not a capture folder");
+    if (names.size() > 1000000)
+      FailInput(dir, "holds more than a million files; not a capture folder");
   }
-  if (error) Fail(dir, "cannot list the folder: " + error.message());
+  if (error) FailInput(dir, "cannot list the folder: " + error.message());
   std::sort(names.begin(), names.end(), NaturalLess);
   return names;
 }
@@ -69,8 +62,8 @@ std::string OnlyWithExtension(const std::vector<std::string>& names, const std::
   for (const std::string& n : names) {
     if (Lower(fs::path(n).extension().string()) != ext) continue;
     if (!found.empty()) {
-      Fail(dir, "holds several " + ext + " files (" + found + ", " + n +
-                    "); name the light file with --lights");
+      FailInput(dir, "holds several " + ext + " files (" + found + ", " + n +
+                         "); name the light file with --lights");
     }
     found = n;
   }
@@ -104,8 +97,8 @@ fs::path FindLightFile(const fs::path& dir, const std::vector<std::string>& file
   }
   if (!own.empty()) return dir / own.filename();
   if (nested.size() > 1) {
-    Fail(dir, "its subfolders hold several .lp files (" + nested[0].string() + ", " +
-                  nested[1].string() + "); name the light file with --lights");
+    FailInput(dir, "its subfolders hold several .lp files (" + nested[0].string() + ", " +
+                       nested[1].string() + "); name the light file with --lights");
   }
   if (nested.size() == 1) return nested[0];
   const fs::path parent = Absolute(dir).parent_path();
@@ -120,16 +113,16 @@ fs::path FindLightFile(const fs::path& dir, const std::vector<std::string>& file
     if (parent_files.size() > 1) break;
   }
   if (parent_files.size() == 1) return (dir / ".." / parent_files[0]).lexically_normal();
-  Fail(dir,
-       "no light directions: found no light_directions.txt, lights.txt, lights.json or .lp "
-       "file here or in the parent folder; name one with --lights FILE");
+  FailInput(dir,
+            "no light directions: found no light_directions.txt, lights.txt, lights.json or .lp "
+            "file here or in the parent folder; name one with --lights FILE");
 }
 
 // An image a .lp names (io/image_list.h's rule).
 fs::path ResolveLpImage(const std::string& name, const fs::path& lp, const fs::path& dir) {
   fs::path found = ResolveListedImage(name, lp, dir);
   if (found.empty()) {
-    Fail(lp, ListedImageMissing(name, lp, dir));
+    FailInput(lp, ListedImageMissing(name, lp, dir));
   }
   return found;
 }
@@ -240,9 +233,9 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
                             Lower(fs::path(name).extension().string()) == ".lp";
                    }) &&
       !LooksLikeImageList((dir / ".." / own_list).lexically_normal())) {
-    Fail(dir,
-         "holds no images (no image files, filenames.txt or .lp): is it the capture's "
-         "folder?");
+    FailInput(dir,
+              "holds no images (no image files, filenames.txt or .lp): is it the capture's "
+              "folder?");
   }
   if (!options.images.empty()) {
     if (light_file.empty() && options.lights_needed) light_file = FindLightFile(dir, files);
@@ -281,7 +274,7 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
         if (!IsCompanionImage(name)) c.names.push_back(name);
       }
       c.order = "natural order";
-      if (c.names.empty()) Fail(dir, "holds no image files (and no filenames.txt)");
+      if (c.names.empty()) FailInput(dir, "holds no image files (and no filenames.txt)");
     }
   }
 
@@ -302,7 +295,7 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
     const std::string rig =
         light_file.empty() ? directory : Absolute(light_file).parent_path().string();
     c.near = FindNearLights(rig, c.names.size(), warnings);
-    if (!c.near.present()) Fail(light_file, "no such file");
+    if (!c.near.present()) FailInput(light_file, "no such file");
     c.light_directions = DirectionsFromPositions(c.near);
     c.lights_path = c.near.positions_path;
     c.lights_format = "positions (near lights)";
@@ -336,12 +329,12 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
       }
     }
     if (c.names.size() != c.light_directions.size()) {
-      Fail(c.lights_path, "has " + std::to_string(c.light_directions.size()) + " lights, but " +
-                              directory + " holds " + std::to_string(c.names.size()) + " images (" +
-                              Range(c.names) +
-                              "): a light missing from the file or a photo too many; to choose "
-                              "the photos, list them in light order in a file given with "
-                              "--images LIST");
+      FailInput(c.lights_path,
+                "has " + std::to_string(c.light_directions.size()) + " lights, but " + directory +
+                    " holds " + std::to_string(c.names.size()) + " images (" + Range(c.names) +
+                    "): a light missing from the file or a photo too many; to choose "
+                    "the photos, list them in light order in a file given with "
+                    "--images LIST");
     }
   }
   if (options.lights_needed && !c.near.present()) {
@@ -365,7 +358,7 @@ CaptureFiles FindCapture(const std::string& directory, const CaptureOptions& opt
   if (c.paths.empty()) {
     for (const std::string& name : c.names) c.paths.push_back((dir / name).string());
   }
-  if (c.paths.empty()) Fail(dir, "holds no images");  // every reader above needs at least one
+  if (c.paths.empty()) FailInput(dir, "holds no images");  // every reader above needs at least one
   // One image under two lights is a slip in the list (the same line pasted twice): the run goes
   // on, as the observations are still valid for one of the lights, but says so.
   {

@@ -24,11 +24,6 @@ namespace {
 
 using internal::ToRgb;
 
-[[noreturn]] void Fail(const fs::path& file, const std::string& message, int line = 0) {
-  throw std::runtime_error(file.string() + (line > 0 ? ":" + std::to_string(line) : "") + ": " +
-                           message);
-}
-
 // One image of a dataset, refused from its header when its size is not the dataset's
 // (`reference` names the file that set it).
 ImageF ReadDatasetImage(const std::string& path, int width, int height, int orientation,
@@ -42,8 +37,8 @@ ImageF ReadDatasetImage(const std::string& path, int width, int height, int orie
           counts->integer_codes = !h.is_float;
         }
         if (h.width != width || h.height != height) {
-          Fail(path, "is " + SizeText(h.width, h.height) + ", but " + reference + " is " +
-                         SizeText(width, height));
+          FailInput(path, "is " + SizeText(h.width, h.height) + ", but " + reference + " is " +
+                              SizeText(width, height));
         }
       },
       orientation));
@@ -55,19 +50,20 @@ void CheckNormalMap(const ImageF& normals, const std::string& path) {
   for (std::size_t p = 0; p < normals.pixel_count(); ++p) {
     const float* n = normals.pixels.data() + 3 * p;
     if (!std::isfinite(n[0]) || !std::isfinite(n[1]) || !std::isfinite(n[2])) {
-      Fail(path, "not a finite number at pixel (" + std::to_string(p % normals.width) + ", " +
-                     std::to_string(p / normals.width) + ")");
+      FailInput(path, "not a finite number at pixel (" + std::to_string(p % normals.width) + ", " +
+                          std::to_string(p / normals.width) + ")");
     }
     const double norm = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
     if (norm == 0) continue;
     if (std::abs(norm - 1) > 0.05) {
-      Fail(path, "is not a normal map: the vector at pixel (" + std::to_string(p % normals.width) +
-                     ", " + std::to_string(p / normals.width) + ") has length " +
-                     std::to_string(norm) + " (unit normals, 0 outside the object expected)");
+      FailInput(path, "is not a normal map: the vector at pixel (" +
+                          std::to_string(p % normals.width) + ", " +
+                          std::to_string(p / normals.width) + ") has length " +
+                          std::to_string(norm) + " (unit normals, 0 outside the object expected)");
     }
     ++unit;
   }
-  if (unit == 0) Fail(path, "holds no normal (all zeros): empty or truncated");
+  if (unit == 0) FailInput(path, "holds no normal (all zeros): empty or truncated");
 }
 
 }  // namespace
@@ -89,7 +85,8 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
   const fs::path dir(directory);
   std::error_code error;
   if (!fs::is_directory(dir, error)) {
-    Fail(dir, fs::exists(dir, error) ? "not a folder (a dataset is a folder)" : "no such folder");
+    FailInput(dir,
+              fs::exists(dir, error) ? "not a folder (a dataset is a folder)" : "no such folder");
   }
   FinishInterruptedCommit(directory);  // an iphong render output cut off while committing
   Prepared p;
@@ -153,16 +150,16 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
   if (!d.files.mask_path.empty()) {
     const Mask file_mask = ReadMask(d.files.mask_path, options.memory, &d.mask_reading);
     if (have_first && (file_mask.width != d.file_width || file_mask.height != d.file_height)) {
-      Fail(d.files.mask_path, "is " + SizeText(file_mask.width, file_mask.height) +
-                                  ", the images are " + SizeText(d.file_width, d.file_height) +
-                                  " (" + d.filenames[0] + ")");
+      FailInput(d.files.mask_path, "is " + SizeText(file_mask.width, file_mask.height) +
+                                       ", the images are " + SizeText(d.file_width, d.file_height) +
+                                       " (" + d.filenames[0] + ")");
     }
     p.file_mask = cut(file_mask);
     d.mask = DownscaleMask(p.file_mask, capture.downscale);
     if (d.mask.count() == 0) {
-      Fail(d.files.mask_path, p.file_mask.count() == 0
-                                  ? "selects no pixel (all zero; nonzero = object)"
-                                  : "selects no pixel after --crop/--downscale");
+      FailInput(d.files.mask_path, p.file_mask.count() == 0
+                                       ? "selects no pixel (all zero; nonzero = object)"
+                                       : "selects no pixel after --crop/--downscale");
     }
   } else if (have_first) {
     p.file_mask = Mask(p.crop.width > 0 ? p.crop.width : d.file_width,
@@ -181,8 +178,8 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
     if (!d.normal_gt.pixels.empty()) {
       if (have_first &&
           (d.normal_gt.width != d.file_width || d.normal_gt.height != d.file_height)) {
-        Fail(truth, "is " + SizeText(d.normal_gt.width, d.normal_gt.height) + ", the images are " +
-                        SizeText(d.file_width, d.file_height));
+        FailInput(truth, "is " + SizeText(d.normal_gt.width, d.normal_gt.height) +
+                             ", the images are " + SizeText(d.file_width, d.file_height));
       }
       CheckNormalMap(d.normal_gt, truth);
       if (p.crop.width > 0) {
@@ -196,12 +193,12 @@ Prepared Prepare(const std::string& directory, const DatasetLoadOptions& options
     const std::string& truth = d.files.near.depth_gt_path;
     d.depth_gt = ReadMatImage(truth, "Depth_gt", 1);
     if (have_first && (d.depth_gt.width != d.file_width || d.depth_gt.height != d.file_height)) {
-      Fail(truth, "is " + SizeText(d.depth_gt.width, d.depth_gt.height) + ", the images are " +
-                      SizeText(d.file_width, d.file_height));
+      FailInput(truth, "is " + SizeText(d.depth_gt.width, d.depth_gt.height) + ", the images are " +
+                           SizeText(d.file_width, d.file_height));
     }
     for (float v : d.depth_gt.pixels) {
       if (!std::isfinite(v) || v < 0)
-        Fail(truth, "Depth_gt holds a value that is not a depth >= 0");
+        FailInput(truth, "Depth_gt holds a value that is not a depth >= 0");
     }
     if (p.crop.width > 0) {
       check_crop(d.depth_gt.width, d.depth_gt.height, truth);
@@ -233,9 +230,9 @@ ImageF WorkingRows(const Prepared& p, ImageF rows, int skip, int count, int file
     }
     if (bad > 0) {
       const int x0 = p.crop.width > 0 ? p.crop.x : 0, y0 = p.crop.width > 0 ? p.crop.y : 0;
-      Fail(path, std::to_string(bad) + " pixel(s) inside the mask are not finite (NaN or " +
-                     "infinite; the first at column " + std::to_string(x0 + at % rows.width) +
-                     ", row " + std::to_string(y0 + file_y0 + at / rows.width) + ")");
+      FailInput(path, std::to_string(bad) + " pixel(s) inside the mask are not finite (NaN or " +
+                          "infinite; the first at column " + std::to_string(x0 + at % rows.width) +
+                          ", row " + std::to_string(y0 + file_y0 + at / rows.width) + ")");
     }
   }
   if (counts) {

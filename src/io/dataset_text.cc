@@ -7,16 +7,13 @@
 #include <set>
 #include <stdexcept>
 
+#include "core/errors.h"
 #include "io/json_reader.h"
 #include "io/scene_file.h"
 #include "solve/photometric_data.h"
 
 namespace iphong::io {
 namespace {
-
-[[noreturn]] void Fail(const std::string& source, const std::string& message, int line = 0) {
-  throw std::runtime_error(source + (line > 0 ? ":" + std::to_string(line) : "") + ": " + message);
-}
 
 // Non-blank lines with their numbers; "\r\n" endings accepted. A line whose first non-blank
 // character is '#' is a comment (numpy.savetxt writes its header so, and MATLAB and spreadsheet
@@ -48,7 +45,7 @@ std::string Shown(const std::string& line) {
 // their own message instead of "expected 3 numbers".
 // `grey`: one number stands for the same value in R, G and B (a grey light's intensity).
 Vec3d Triple(const std::string& line, const std::string& source, int number, bool grey = false) {
-  if (line.find('\0') != std::string::npos) Fail(source, "not a text file", number);
+  if (line.find('\0') != std::string::npos) FailInput(source, "not a text file", number);
   Vec3d v;
   const char* p = line.c_str();
   int count = 0;
@@ -63,12 +60,13 @@ Vec3d Triple(const std::string& line, const std::string& source, int number, boo
   if (grey && count == 1) v = Vec3d::Constant(v[0]);
   if ((count != 3 && !(grey && count == 1)) ||
       std::string(p).find_first_not_of(" \t,") != std::string::npos) {
-    Fail(source,
-         std::string(grey ? "expected 3 numbers (or 1 for a grey light)" : "expected 3 numbers") +
-             ", got '" + Shown(line) + "'",
-         number);
+    FailInput(
+        source,
+        std::string(grey ? "expected 3 numbers (or 1 for a grey light)" : "expected 3 numbers") +
+            ", got '" + Shown(line) + "'",
+        number);
   }
-  if (!v.allFinite()) Fail(source, "not a finite number: '" + Shown(line) + "'", number);
+  if (!v.allFinite()) FailInput(source, "not a finite number: '" + Shown(line) + "'", number);
   return v;
 }
 
@@ -81,14 +79,14 @@ std::vector<std::string> ParseFilenames(const std::string& text, const std::stri
     const auto begin = line.find_first_not_of(" \t"), end = line.find_last_not_of(" \t");
     std::string name = line.substr(begin, end - begin + 1);
     for (unsigned char c : name) {
-      if (c < 32) Fail(source, "an image name with control characters", number);
+      if (c < 32) FailInput(source, "an image name with control characters", number);
     }
     if (names.size() == max_images) {
-      Fail(source, "lists more than " + std::to_string(max_images) + " images", number);
+      FailInput(source, "lists more than " + std::to_string(max_images) + " images", number);
     }
     names.push_back(std::move(name));
   }
-  if (names.empty()) Fail(source, "lists no images (one file name per line expected)");
+  if (names.empty()) FailInput(source, "lists no images (one file name per line expected)");
   return names;
 }
 
@@ -130,16 +128,17 @@ std::vector<T> ParseCounted(const std::string& text, const std::string& source,
   if (lines) lines->clear();
   for (const auto& [number, line] : Lines(text)) {
     if (values.size() == expected) {
-      Fail(source,
-           "has more lines than the " + std::to_string(expected) + " images in " + count_source,
-           number);
+      FailInput(
+          source,
+          "has more lines than the " + std::to_string(expected) + " images in " + count_source,
+          number);
     }
     values.push_back(parse_one(line, number));
     if (lines) lines->push_back(number);
   }
   if (values.size() != expected) {
-    Fail(source, "has " + std::to_string(values.size()) + " lines for " + std::to_string(expected) +
-                     " images in " + count_source);
+    FailInput(source, "has " + std::to_string(values.size()) + " lines for " +
+                          std::to_string(expected) + " images in " + count_source);
   }
   return values;
 }
@@ -159,15 +158,15 @@ std::vector<double> ParseScalars(const std::string& text, const std::string& sou
                                  std::vector<int>* lines) {
   return ParseCounted<double>(
       text, source, expected, count_source, lines, [&](const std::string& line, int number) {
-        if (line.find('\0') != std::string::npos) Fail(source, "not a text file", number);
+        if (line.find('\0') != std::string::npos) FailInput(source, "not a text file", number);
         const char* p = line.c_str();
         char* end = nullptr;
         const double value = std::strtod(p, &end);
         if (end == p || std::string(end).find_first_not_of(" \t,") != std::string::npos) {
-          Fail(source, "expected one number, got '" + Shown(line) + "'", number);
+          FailInput(source, "expected one number, got '" + Shown(line) + "'", number);
         }
         if (!std::isfinite(value)) {
-          Fail(source, "not a finite number: '" + Shown(line) + "'", number);
+          FailInput(source, "not a finite number: '" + Shown(line) + "'", number);
         }
         return value;
       });
@@ -248,13 +247,14 @@ void NormalizeDirections(std::vector<Vec3d>& directions, const std::string& sour
     const int line = first_line + static_cast<int>(i);
     // Scaled first, so 1e308 components have a length instead of an infinite one.
     const double scale = d.cwiseAbs().maxCoeff();
-    if (!(scale > 0)) Fail(source, "zero light direction", line);
+    if (!(scale > 0)) FailInput(source, "zero light direction", line);
     const double norm = (d / scale).norm() * scale;
     // A denormal or near-zero vector has no direction worth normalizing: 1e-320 0 0 is a slip.
     if (norm < 1e-6) {
       char length[32];
       std::snprintf(length, sizeof length, "%.3g", norm);
-      Fail(source, std::string("light direction has length ") + length + ": not a direction", line);
+      FailInput(source, std::string("light direction has length ") + length + ": not a direction",
+                line);
     }
     if (std::abs(norm - 1) > 1e-3 && off++ == 0) first_off = line, first_length = norm;
     d = (d / scale).normalized();
@@ -268,7 +268,7 @@ void NormalizeDirections(std::vector<Vec3d>& directions, const std::string& sour
                                        std::to_string(directions.size()) + " directions)"
                                  : std::string()));
   }
-  if (std::string m = solve::CheckLightSpan(directions); !m.empty()) Fail(source, m);
+  if (std::string m = solve::CheckLightSpan(directions); !m.empty()) FailInput(source, m);
   // A light behind the surface's plane as seen from the camera reaches only what faces away from
   // it: a few such lights are a rim setup, most of them a file in another frame (OpenCV's and
   // many renderers': y down, z into the scene), which gives normals turned inside out.
@@ -338,20 +338,20 @@ LightFile ParseLightFile(const std::string& text, const std::string& source, std
     file = ParseAliceVisionJson(text, source, max_lights);
   } else {
     auto lines = Lines(text);
-    if (lines.empty()) Fail(source, "is empty (one light direction per line expected)");
+    if (lines.empty()) FailInput(source, "is empty (one light direction per line expected)");
     std::size_t count = 0;
     const bool counted = CountLine(lines.front().second, &count);
     if (counted) {
       if (lines.size() - 1 != count) {
-        Fail(source,
-             "says " + std::to_string(count) + " lights on its first line but lists " +
-                 std::to_string(lines.size() - 1),
-             lines.front().first);
+        FailInput(source,
+                  "says " + std::to_string(count) + " lights on its first line but lists " +
+                      std::to_string(lines.size() - 1),
+                  lines.front().first);
       }
       lines.erase(lines.begin());
     }
     if (lines.size() > max_lights) {
-      Fail(source, "lists more than " + std::to_string(max_lights) + " lights");
+      FailInput(source, "lists more than " + std::to_string(max_lights) + " lights");
     }
     if (!lines.empty()) first_line = lines.front().first;
     // RTI: "name lx ly lz" — a first field that is not a number.
@@ -364,7 +364,7 @@ LightFile ParseLightFile(const std::string& text, const std::string& source, std
         !probe.empty() && (end == start || (*end != '\0' && std::strchr(" \t,", *end) == nullptr));
     file.format = named ? "RTI .lp" : counted ? "count + directions" : "directions";
     for (const auto& [number, line] : lines) {
-      if (line.find('\0') != std::string::npos) Fail(source, "not a text file", number);
+      if (line.find('\0') != std::string::npos) FailInput(source, "not a text file", number);
       if (!named) {
         file.directions.push_back(Triple(line, source, number));
         continue;
@@ -376,21 +376,21 @@ LightFile ParseLightFile(const std::string& text, const std::string& source, std
         starts.push_back(at);
       }
       if (starts.size() < 4) {
-        Fail(source, "expected 'filename lx ly lz', got '" + Shown(line) + "'", number);
+        FailInput(source, "expected 'filename lx ly lz', got '" + Shown(line) + "'", number);
       }
       std::string name = line.substr(0, starts[starts.size() - 3]);
       name.erase(name.find_last_not_of(" \t") + 1);
       for (unsigned char c : name) {
-        if (c < 32) Fail(source, "an image name with control characters", number);
+        if (c < 32) FailInput(source, "an image name with control characters", number);
       }
       file.image_names.push_back(name);
       file.directions.push_back(Triple(line.substr(starts[starts.size() - 3]), source, number));
     }
   }
-  if (file.directions.empty()) Fail(source, "lists no lights");
+  if (file.directions.empty()) FailInput(source, "lists no lights");
   if (expected > 0 && file.directions.size() != expected) {
-    Fail(source, "has " + std::to_string(file.directions.size()) + " lights for " +
-                     std::to_string(expected) + " images");
+    FailInput(source, "has " + std::to_string(file.directions.size()) + " lights for " +
+                          std::to_string(expected) + " images");
   }
   NormalizeDirections(file.directions, source, warnings, first_line);
   return file;
@@ -410,7 +410,8 @@ std::vector<Vec3d> ParseLightIntensities(const std::string& text, const std::str
       [&](const std::string& line, int number) { return Triple(line, source, number, true); });
   for (std::size_t i = 0; i < intensities.size(); ++i) {
     if (!solve::LightIntensityInRange(intensities[i])) {
-      Fail(source, "light intensities must be between 1e-30 and 1e30", static_cast<int>(i + 1));
+      FailInput(source, "light intensities must be between 1e-30 and 1e30",
+                static_cast<int>(i + 1));
     }
   }
   return intensities;
@@ -420,8 +421,8 @@ ImageF ParseNormalText(const std::string& text, const std::string& source, int w
   const auto lines = Lines(text);
   const std::size_t expected = static_cast<std::size_t>(width) * height;
   if (lines.size() != expected) {
-    Fail(source, "has " + std::to_string(lines.size()) + " lines, expected " +
-                     std::to_string(expected) + " (width x height of the images)");
+    FailInput(source, "has " + std::to_string(lines.size()) + " lines, expected " +
+                          std::to_string(expected) + " (width x height of the images)");
   }
   ImageF normals(width, height, 3);
   for (std::size_t p = 0; p < lines.size(); ++p) {

@@ -31,6 +31,11 @@ int CloseReporting(int fd) { return ::close(fd) == 0 ? 0 : errno; }
 
 }  // namespace
 
+bool Exists(const std::string& path) {
+  std::error_code error;
+  return std::filesystem::exists(path, error);
+}
+
 std::uint64_t RequireRegularFile(const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) {

@@ -14,6 +14,9 @@ namespace iphong::io {
 // readers and writers choose a format by.
 std::string LowerExtension(const std::string& path);
 
+// Whether anything is at `path` (a file, a folder, a link that resolves); an error reads as no.
+bool Exists(const std::string& path);
+
 // Throws std::runtime_error "PATH: no such file" / "PATH: is a folder, not a file" / "PATH: not
 // a regular file" unless `path` is a regular file (symbolic links followed). Returns its size.
 std::uint64_t RequireRegularFile(const std::string& path);

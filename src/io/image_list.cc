@@ -11,11 +11,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-bool Exists(const fs::path& path) {
-  std::error_code error;
-  return fs::exists(path, error);
-}
-
 bool IsCount(const std::string& entry) {
   return !entry.empty() && entry.size() <= 9 &&
          entry.find_first_not_of("0123456789") == std::string::npos;

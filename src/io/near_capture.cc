@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "core/errors.h"
 #include "io/files.h"
 #include "near/near.h"
 
@@ -15,11 +16,7 @@ namespace iphong::io {
 namespace fs = std::filesystem;
 namespace {
 
-[[noreturn]] void Fail(const std::string& source, const std::string& message, int line = 0) {
-  throw std::runtime_error(source + (line > 0 ? ":" + std::to_string(line) : "") + ": " + message);
-}
-
-bool Exists(const fs::path& path) {
+bool IsRegularFile(const fs::path& path) {
   std::error_code e;
   return fs::is_regular_file(path, e);
 }
@@ -33,7 +30,7 @@ std::string Mm(const Vec3d& v) {
 // Directions may be another length: scaled to unit, zero refused.
 Vec3d Unit(const Vec3d& v, const std::string& source, int line, const char* what) {
   const double scale = v.cwiseAbs().maxCoeff();
-  if (!(scale > 0)) Fail(source, std::string("zero ") + what, line);
+  if (!(scale > 0)) FailInput(source, std::string("zero ") + what, line);
   return (v / scale).normalized();
 }
 
@@ -54,7 +51,7 @@ NearLightFiles FindNearLights(const std::string& directory, std::size_t count,
                               std::vector<std::string>* warnings) {
   const fs::path dir(directory);
   NearLightFiles n;
-  if (!Exists(dir / "light_positions.txt")) return n;
+  if (!IsRegularFile(dir / "light_positions.txt")) return n;
   n.positions_path = (dir / "light_positions.txt").string();
   n.positions_mm = ParseTriples(ReadTextFile(n.positions_path), n.positions_path, count,
                                 "filenames.txt", &n.position_lines);
@@ -65,23 +62,25 @@ NearLightFiles FindNearLights(const std::string& directory, std::size_t count,
   for (std::size_t j = 0; j < n.positions_mm.size(); ++j) {
     const Vec3d& s = n.positions_mm[j];
     if (s.z() > 0) {
-      Fail(n.positions_path,
-           "light " + std::to_string(j + 1) + " at " + Mm(s) + " is behind the camera (z > 0" +
-               (2 * behind > n.positions_mm.size()
-                    ? "; " + std::to_string(behind) + " of " +
-                          std::to_string(n.positions_mm.size()) +
-                          " are: OpenCV's frame has y down and z into the scene, iphong's y up "
-                          "and z toward the viewer — negate y and z"
-                    : "") +
-               "); positions are in the camera frame, the object at z < 0",
-           n.position_lines[j]);
+      FailInput(
+          n.positions_path,
+          "light " + std::to_string(j + 1) + " at " + Mm(s) + " is behind the camera (z > 0" +
+              (2 * behind > n.positions_mm.size()
+                   ? "; " + std::to_string(behind) + " of " +
+                         std::to_string(n.positions_mm.size()) +
+                         " are: OpenCV's frame has y down and z into the scene, iphong's y up "
+                         "and z toward the viewer — negate y and z"
+                   : "") +
+              "); positions are in the camera frame, the object at z < 0",
+          n.position_lines[j]);
     }
   }
   n.camera_path = (dir / "camera.json").string();
-  if (!Exists(n.camera_path)) {
-    Fail(n.positions_path,
-         "a near-light capture needs camera.json beside it: {\"fx\", \"fy\", \"cx\", \"cy\"} in "
-         "pixels (or {\"pixel_size\"} in mm for an orthographic camera)");
+  if (!IsRegularFile(n.camera_path)) {
+    FailInput(
+        n.positions_path,
+        "a near-light capture needs camera.json beside it: {\"fx\", \"fy\", \"cx\", \"cy\"} in "
+        "pixels (or {\"pixel_size\"} in mm for an orthographic camera)");
   }
   std::vector<std::string> ignored;
   n.camera = ParseCameraJson(ReadTextFile(n.camera_path), n.camera_path, &ignored);
@@ -90,7 +89,7 @@ NearLightFiles FindNearLights(const std::string& directory, std::size_t count,
     for (const std::string& k : ignored) keys += (keys.empty() ? "" : ", ") + k;
     warnings->push_back(n.camera_path + ": ignored " + keys + " (iphong reads fx, fy, cx, cy)");
   }
-  if (Exists(dir / "light_axes.txt")) {
+  if (IsRegularFile(dir / "light_axes.txt")) {
     n.axes_path = (dir / "light_axes.txt").string();
     n.axes =
         ParseTriples(ReadTextFile(n.axes_path), n.axes_path, count, "filenames.txt", &n.axis_lines);
@@ -98,21 +97,22 @@ NearLightFiles FindNearLights(const std::string& directory, std::size_t count,
       n.axes[j] = Unit(n.axes[j], n.axes_path, n.axis_lines[j], "LED axis");
     }
   }
-  if (Exists(dir / "light_anisotropy.txt")) {
+  if (IsRegularFile(dir / "light_anisotropy.txt")) {
     n.anisotropy_path = (dir / "light_anisotropy.txt").string();
     std::vector<int> lines;
     n.anisotropy = ParseScalars(ReadTextFile(n.anisotropy_path), n.anisotropy_path, count,
                                 "filenames.txt", &lines);
     for (std::size_t j = 0; j < n.anisotropy.size(); ++j) {
       if (!(n.anisotropy[j] >= 0 && n.anisotropy[j] <= 1000)) {
-        Fail(n.anisotropy_path, "an LED's anisotropy mu must be in 0..1000 (0: isotropic)",
-             lines[j]);
+        FailInput(n.anisotropy_path, "an LED's anisotropy mu must be in 0..1000 (0: isotropic)",
+                  lines[j]);
       }
       if (n.anisotropy[j] > 0 && n.axes.empty()) {
-        Fail(n.anisotropy_path,
-             "LEDs with an anisotropy need their axes: light_axes.txt (one unit 'ax ay az' per "
-             "light, the way it points)",
-             lines[j]);
+        FailInput(
+            n.anisotropy_path,
+            "LEDs with an anisotropy need their axes: light_axes.txt (one unit 'ax ay az' per "
+            "light, the way it points)",
+            lines[j]);
       }
     }
   } else if (!n.axes.empty() && warnings) {
@@ -120,7 +120,7 @@ NearLightFiles FindNearLights(const std::string& directory, std::size_t count,
                         ": LED axes without light_anisotropy.txt: the lights are taken as "
                         "isotropic (mu 0), the axes unused");
   }
-  if (Exists(dir / "Depth_gt.mat")) n.depth_gt_path = (dir / "Depth_gt.mat").string();
+  if (IsRegularFile(dir / "Depth_gt.mat")) n.depth_gt_path = (dir / "Depth_gt.mat").string();
   return n;
 }
 
@@ -187,12 +187,12 @@ void CheckDirectionsAgree(const NearLightFiles& files, const std::vector<Vec3d>&
                     "light_positions.txt (seen from %s, the point nearest every light's line): "
                     "the two files describe different lights, orders or frames",
                     j + 1, angle, Mm(x).c_str());
-      Fail(directions_path, text, line_of(j));
+      FailInput(directions_path, text, line_of(j));
     }
   }
   if (x.z() > 0) {
-    Fail(directions_path, "the directions point from " + Mm(x) +
-                              ", behind the camera, toward the positions: another frame?");
+    FailInput(directions_path, "the directions point from " + Mm(x) +
+                                   ", behind the camera, toward the positions: another frame?");
   }
 }
 

@@ -16,24 +16,20 @@
 namespace iphong::io {
 namespace {
 
-[[noreturn]] void Fail(const std::string& file, const std::string& message) {
-  throw std::runtime_error(file + ": " + message);
-}
-
 // A MAT-file (level 5) is a 128-byte header and then data elements, each an 8-byte tag (type,
 // byte count) and its bytes. matio reads a cut-off compressed element as zeros without a word, so
 // the elements are walked first: one that runs past the end of the file is an error.
 void CheckMat5Complete(const std::string& path) {
   const std::uint64_t file_size = RequireRegularFile(path);
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) Fail(path, std::string("cannot open: ") + std::strerror(errno));
+  if (fd < 0) FailInput(path, std::string("cannot open: ") + std::strerror(errno));
   struct Close {
     int fd;
     ~Close() { ::close(fd); }
   } closer{fd};
   char header[128];
   if (file_size < 128 || ::pread(fd, header, 128, 0) != 128) {
-    Fail(path, "too short for a MATLAB file (truncated?)");
+    FailInput(path, "too short for a MATLAB file (truncated?)");
   }
   if (std::string(header, 10) == "MATLAB 7.3") return;         // HDF5: its own checks apply
   const bool swap = header[126] == 'M' && header[127] == 'I';  // written big-endian
@@ -45,7 +41,7 @@ void CheckMat5Complete(const std::string& path) {
   for (std::uint64_t at = 128; at < file_size;) {
     unsigned char tag[8];
     if (at + 8 > file_size || ::pread(fd, tag, 8, static_cast<off_t>(at)) != 8) {
-      Fail(path, "ends inside a data element: truncated");
+      FailInput(path, "ends inside a data element: truncated");
     }
     const std::uint32_t type = word(tag), count = word(tag + 4);
     if (type >> 16 != 0) {  // small data element: type and count in one word, 4 bytes of data
@@ -55,7 +51,7 @@ void CheckMat5Complete(const std::string& path) {
     // Uncompressed elements are padded to 8 bytes (the file's last one may end unpadded).
     const std::uint64_t size = count;
     if (at + 8 + size > file_size) {
-      Fail(path, "a data element runs past the end of the file: truncated");
+      FailInput(path, "a data element runs past the end of the file: truncated");
     }
     at += 8 + (type == 15 ? size : (size + 7) / 8 * 8);
   }
@@ -97,11 +93,11 @@ void WriteMatImage(const std::string& path, const std::string& variable, const I
 ImageF ReadMatImage(const std::string& path, const std::string& variable, int channels) {
   CheckMat5Complete(path);
   mat_t* mat = Mat_Open(path.c_str(), MAT_ACC_RDONLY);
-  if (mat == nullptr) Fail(path, "not a MATLAB file matio can read");
+  if (mat == nullptr) FailInput(path, "not a MATLAB file matio can read");
   matvar_t* info = Mat_VarReadInfo(mat, variable.c_str());
   if (info == nullptr) {
     Mat_Close(mat);
-    Fail(path, "has no variable " + variable);
+    FailInput(path, "has no variable " + variable);
   }
   const std::size_t k = static_cast<std::size_t>(channels);
   const bool rank_ok = k == 3 ? info->rank == 3 && info->dims[2] == 3
@@ -112,14 +108,14 @@ ImageF ReadMatImage(const std::string& path, const std::string& variable, int ch
   Mat_VarFree(info);
   if (!shape_ok) {
     Mat_Close(mat);
-    Fail(path, variable + " must be a real H x W" + (k == 3 ? " x 3" : "") +
-                   " array of double or single");
+    FailInput(path, variable + " must be a real H x W" + (k == 3 ? " x 3" : "") +
+                        " array of double or single");
   }
   matvar_t* var = Mat_VarRead(mat, variable.c_str());
   Mat_Close(mat);
   if (var == nullptr || var->data == nullptr) {
     if (var) Mat_VarFree(var);
-    Fail(path, "cannot read variable " + variable + " (corrupt file?)");
+    FailInput(path, "cannot read variable " + variable + " (corrupt file?)");
   }
   struct Free {
     matvar_t* v;
@@ -128,7 +124,7 @@ ImageF ReadMatImage(const std::string& path, const std::string& variable, int ch
   const std::size_t h = var->dims[0], w = var->dims[1];
   const std::size_t element = var->class_type == MAT_C_DOUBLE ? sizeof(double) : sizeof(float);
   if (var->nbytes < h * w * k * element) {
-    Fail(path, variable + " holds fewer values than its size says (corrupt file?)");
+    FailInput(path, variable + " holds fewer values than its size says (corrupt file?)");
   }
   ImageF image(static_cast<int>(w), static_cast<int>(h), channels);
   auto value = [&](std::size_t i) -> double {

@@ -8,7 +8,9 @@
 #include <cmath>
 
 namespace iphong::solve {
-namespace {
+// Not an anonymous namespace: PixelFitter::State (declared in the header, so of external linkage)
+// holds a PixelModel.
+namespace pixel_fit_internal {
 
 using Jet2 = ceres::Jet<double, 2>;
 using Factors = std::vector<reflectance::LightFactors<Jet2>>;  // one per light
@@ -135,7 +137,8 @@ struct PixelModel {
   }
 };
 
-}  // namespace
+}  // namespace pixel_fit_internal
+using namespace pixel_fit_internal;
 
 std::string ShadingWeights::Validate() const {
   if (upper.size() != weight.size()) return "shading weights: as many band edges as weights needed";
