@@ -11,7 +11,7 @@ build=$(realpath -m "${1:-build-sanitize}")
 logs="$build/sanitizer-logs"
 
 cmake -S . -B "$build" -DIPHONG_SANITIZE=address,undefined -DIPHONG_PYTHON=OFF -DIPHONG_BENCH=OFF \
-  -DCMAKE_BUILD_TYPE=RelWithDebInfo
+  -DIPHONG_UNITY_BUILD=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo
 cmake --build "$build" -j2
 rm -rf "$logs" && mkdir -p "$logs"
 
