@@ -42,7 +42,9 @@ foreach(role io near material calibrate solve integrate render geometry reflecta
   string(APPEND IPHONG_PC_LIBS " -liphong_${role}")
 endforeach()
 string(STRIP "${IPHONG_PC_LIBS}" IPHONG_PC_LIBS)
-set(IPHONG_PC_DEPS "-lceres -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -pthread")
+# glog: Ceres's headers check with glog's CHECK macros, so iphong's own objects can call it
+# (Ceres's CMake package passes glog on; a .pc file must name it).
+set(IPHONG_PC_DEPS "-lceres -lglog -lopencv_imgcodecs -lopencv_imgproc -lopencv_core -pthread")
 if(CHOLMOD_LIBRARY)
   string(APPEND IPHONG_PC_DEPS " -lcholmod")
 endif()
