@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "core/timing.h"
+#include "near/distance_choice.h"
 #include "near/effective_distance.h"
 
 namespace iphong::near {
@@ -88,10 +89,7 @@ EffectiveDistanceResult SolveEffectiveDistanceInBands(const solve::BandSource& s
     for (int y0 = 0; y0 < height; y0 += band_rows) {
       const int y1 = std::min(height, y0 + band_rows);
       solve::PhotometricData band = source.read(y0, y1, false);
-      band.perspective = near_layout.perspective;
-      band.point_lights = near_layout.point_lights;
-      band.light_directions = near_layout.light_directions;
-      band.light_intensities = near_layout.light_intensities;
+      internal::WithLightsOf(band, near_layout);
       if (!near_layout.points_cam.empty()) {  // empty: distant lights (the foil's refit)
         band.points_cam.assign(
             near_layout.points_cam.begin() + std::ptrdiff_t(position),
