@@ -35,6 +35,8 @@ NormalSearch::NormalSearch(const CandidateTable& table, int refine, std::optiona
   usable_.resize(table.lights());
   zero_row_.assign(static_cast<std::size_t>(table.lights()) * kSearchLanes, 0.0f);
   lit_.reserve(table.lights());
+  unlit_.reserve(table.lights());
+  fold_unusable_.assign(table.folds(), 0);
   keep_ = std::max(refine_, kCoarseTop);
   scores_.reserve(keep_);
   heap_.reserve(keep_);
@@ -120,15 +122,18 @@ void NormalSearch::ScoreBlocks(int blocks, const float* const* diffuse,
   // packed with it; otherwise gathered from the table's base, or summed over the usable lights
   // (the kernel does that when given none).
   const double* base[4] = {nullptr, nullptr, nullptr, nullptr};
+  // Candidate c's sums in the base are at from + c·stride (the base chosen once a search).
+  const double* from = table_.base_sums(base_, 0);
+  const std::ptrdiff_t stride = table_.base_sums(base_, 1) - from;
   for (int q = 0; q < blocks && from_table_; ++q) {
     if (sums[q] && base_ < 0) {
       base[q] = sums[q];
       continue;
     }
     for (int i = 0; i < W; ++i) {
-      const bool in = i < count[q] && candidates[q][i] >= 0;
-      const double* c = in ? table_.base_sums(base_, candidates[q][i]) : nullptr;
-      for (int m = 0; m < 3; ++m) gathered_[q][m * W + i] = in ? c[m] : 0.0;
+      const int c = i < count[q] ? candidates[q][i] : -1;
+      const double* at = from + stride * std::max(c, 0);
+      for (int m = 0; m < 3; ++m) gathered_[q][m * W + i] = c >= 0 ? at[m] : 0.0;
     }
     base[q] = gathered_[q];
   }
@@ -280,35 +285,39 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
   const std::vector<int>& fold = table_.fold();
   const int folds = table_.folds();
   lit_.clear();
-  fold_unusable_.assign(folds, 0);
-  int unusable = 0;
+  unlit_.clear();
   for (int j = 0; j < k; ++j) {
     y_[j] = static_cast<float>(y[j]);
     usable_[j] = usable[j] != 0 ? 1.0f : 0.0f;
-    if (usable_[j] != 0) {
-      lit_.push_back(j);
-    } else {
-      ++unusable;
-      if (folds > 0) ++fold_unusable_[fold[j]];
-    }
+    (usable_[j] != 0 ? lit_ : unlit_).push_back(j);
   }
+  const int unusable = static_cast<int>(unlit_.size());
   // The sums Σ d², Σ d s, Σ s² over the usable lights: the table's over every light or over a
   // fold's training lights — whichever holds them all and the fewest others (a fold's base holds
-  // them when every light of the fold is unusable) — less those few others' terms (saturated
-  // observations, mostly); summed directly only when more than a quarter of the base would be
-  // left out.
+  // them when every light of the fold is unusable; the first such fold wins a tie) — less those
+  // few others' terms (saturated observations, mostly); summed directly only when more than a
+  // quarter of the base would be left out. Only the folds of unusable lights can hold them, so
+  // only those few are counted (fold_unusable_ is all zeros between searches).
   base_ = -1;
   int fewest = unusable;
-  for (int f = 0; f < folds; ++f) {
-    if (fold_unusable_[f] == table_.fold_size(f) && unusable - table_.fold_size(f) < fewest) {
-      base_ = f;
-      fewest = unusable - table_.fold_size(f);
+  if (folds > 0) {
+    held_folds_.clear();
+    for (const int j : unlit_) {
+      if (fold_unusable_[fold[j]]++ == 0) held_folds_.push_back(fold[j]);
+    }
+    std::sort(held_folds_.begin(), held_folds_.end());
+    for (const int f : held_folds_) {
+      if (fold_unusable_[f] == table_.fold_size(f) && unusable - table_.fold_size(f) < fewest) {
+        base_ = f;
+        fewest = unusable - table_.fold_size(f);
+      }
+      fold_unusable_[f] = 0;
     }
   }
   from_table_ = 4 * fewest <= k;
   excluded_.clear();
-  for (int j = 0; j < k && from_table_; ++j) {
-    if ((base_ < 0 || fold[j] != base_) && usable_[j] == 0) excluded_.push_back(j);
+  for (const int j : unlit_) {
+    if (from_table_ && (base_ < 0 || fold[j] != base_)) excluded_.push_back(j);
   }
   scores_.clear();
   heap_.clear();

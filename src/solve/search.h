@@ -250,12 +250,14 @@ class NormalSearch {
   std::vector<float> near_diffuse_, near_specular_;
   std::vector<int> refit_;  // the scores_ to refit
   std::vector<float> refit_diffuse_, refit_specular_, refit_weights_;
-  std::vector<float> zero_row_;  // k·kSearchLanes zeros: a padding lane's factors
-  std::vector<int> excluded_;    // lights of the sums' base that the search leaves out
-  std::vector<int> lit_;         // the usable lights
-  int base_ = -1;                // the sums' base (CandidateTable::base_sums)
-  bool from_table_ = true;       // sums from the base less excluded_, else summed directly
-  std::vector<int> fold_unusable_;
+  std::vector<float> zero_row_;     // k·kSearchLanes zeros: a padding lane's factors
+  std::vector<int> excluded_;       // lights of the sums' base that the search leaves out
+  std::vector<int> lit_;            // the usable lights
+  int base_ = -1;                   // the sums' base (CandidateTable::base_sums)
+  bool from_table_ = true;          // sums from the base less excluded_, else summed directly
+  std::vector<int> unlit_;          // the unusable lights
+  std::vector<int> fold_unusable_;  // per fold, how many are unusable (zero between searches)
+  std::vector<int> held_folds_;     // the folds of the unusable lights
 };
 
 // What a held-out fit does after the search on a fold's training lights: by default nothing (the
