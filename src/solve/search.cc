@@ -122,9 +122,6 @@ void NormalSearch::ScoreBlocks(int blocks, const float* const* diffuse,
   // packed with it; otherwise gathered from the table's base, or summed over the usable lights
   // (the kernel does that when given none).
   const double* base[4] = {nullptr, nullptr, nullptr, nullptr};
-  // Candidate c's sums in the base are at from + c·stride (the base chosen once a search).
-  const double* from = table_.base_sums(base_, 0);
-  const std::ptrdiff_t stride = table_.base_sums(base_, 1) - from;
   for (int q = 0; q < blocks && from_table_; ++q) {
     if (sums[q] && base_ < 0) {
       base[q] = sums[q];
@@ -132,7 +129,7 @@ void NormalSearch::ScoreBlocks(int blocks, const float* const* diffuse,
     }
     for (int i = 0; i < W; ++i) {
       const int c = i < count[q] ? candidates[q][i] : -1;
-      const double* at = from + stride * std::max(c, 0);
+      const double* at = base_from_ + base_stride_ * std::max(c, 0);
       for (int m = 0; m < 3; ++m) gathered_[q][m * W + i] = c >= 0 ? at[m] : 0.0;
     }
     base[q] = gathered_[q];
@@ -315,6 +312,8 @@ SearchResult NormalSearch::Search(const double* y, const double* usable, double 
     }
   }
   from_table_ = 4 * fewest <= k;
+  base_from_ = table_.base_sums(base_, 0);
+  base_stride_ = table_.base_sums(base_, 1) - base_from_;
   excluded_.clear();
   for (const int j : unlit_) {
     if (from_table_ && (base_ < 0 || fold[j] != base_)) excluded_.push_back(j);

@@ -250,10 +250,12 @@ class NormalSearch {
   std::vector<float> near_diffuse_, near_specular_;
   std::vector<int> refit_;  // the scores_ to refit
   std::vector<float> refit_diffuse_, refit_specular_, refit_weights_;
-  std::vector<float> zero_row_;     // k·kSearchLanes zeros: a padding lane's factors
-  std::vector<int> excluded_;       // lights of the sums' base that the search leaves out
-  std::vector<int> lit_;            // the usable lights
-  int base_ = -1;                   // the sums' base (CandidateTable::base_sums)
+  std::vector<float> zero_row_;        // k·kSearchLanes zeros: a padding lane's factors
+  std::vector<int> excluded_;          // lights of the sums' base that the search leaves out
+  std::vector<int> lit_;               // the usable lights
+  int base_ = -1;                      // the sums' base (CandidateTable::base_sums)
+  const double* base_from_ = nullptr;  // candidate c's sums in it at base_from_ + c·base_stride_
+  std::ptrdiff_t base_stride_ = 0;
   bool from_table_ = true;          // sums from the base less excluded_, else summed directly
   std::vector<int> unlit_;          // the unusable lights
   std::vector<int> fold_unusable_;  // per fold, how many are unusable (zero between searches)
