@@ -136,7 +136,7 @@ bool SolveNear(const solve::PhotometricData& data, const solve::NormalOptions& o
                const py::object& light_positions, const py::object& camera,
                const py::object& light_axes, const py::object& light_anisotropy,
                const py::object& distance, const py::object& light_distance, py::dict& out,
-               solve::NormalResult* result_out) {
+               solve::NormalResult* result_out, solve::NormalResult* distant) {
   const std::size_t k = static_cast<std::size_t>(data.images);
   solve::NormalResult& result = *result_out;
   if (!light_positions.is_none()) {
@@ -185,6 +185,7 @@ bool SolveNear(const solve::PhotometricData& data, const solve::NormalOptions& o
         r = near::SolveEffectiveDistance(data, e);
       }
       result = r.normals;
+      if (distant) *distant = std::move(r.distant);
       out["effective_distance"] = DistanceDict(r);
     } else {
       return false;

@@ -14,6 +14,7 @@
 #include "io/image_io.h"
 #include "solve/depth_axis.h"
 #include "solve/few_images.h"
+#include "solve/image_check.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
 #include "solve/reading_check.h"
@@ -205,11 +206,45 @@ depend on its own observations and the plan only, so any blocking gives the same
           depth_slip = !c.message.empty();
           if (depth_slip) warn(c.message);
         }
-        solve::NormalResult result;
+        solve::NormalResult result, distant;
+        bool solved_distant = false;
         if (!SolveNear(data, options, light_positions, camera, light_axes, light_anisotropy,
-                       distance, light_distance, out, &result)) {
+                       distance, light_distance, out, &result, &distant)) {
           py::gil_scoped_release release;
           result = solve::RecoverNormals(data, options);
+        } else {
+          solved_distant = light_positions.is_none();
+        }
+        // Which images disagree with the others, as `iphong normals` says it: against the
+        // distant solve (solve/image_check.h). Not for near lights nor one or two images.
+        if (light_positions.is_none() && k >= 3) {
+          solve::ImageCheckOptions image_options;
+          image_options.saturation = options.saturation;
+          image_options.shadow_threshold = options.shadow_threshold;
+          if (options.material_known) image_options.known_ks = options.ks;
+          image_options.threads = threads;
+          const solve::ImageCheck c =
+              solve::CheckImages(data, solved_distant ? distant : result, image_options);
+          if (c.checked) {
+            out["image_check"] =
+                py::dict(py::arg("misfit") = c.misfit, py::arg("score") = c.score,
+                         py::arg("observations") = c.observations,
+                         py::arg("typical_misfit") = c.typical_misfit,
+                         py::arg("disagreeing") = c.disagreeing, py::arg("heldout") = c.heldout);
+            if (!c.disagreeing.empty()) {
+              std::string which;
+              for (const int j : c.disagreeing) {
+                which += (which.empty() ? "" : ", ") + std::to_string(j);
+              }
+              py::module_::import("warnings")
+                  .attr("warn")(
+                      (c.disagreeing.size() == 1 ? "image " : "images ") + which +
+                      (c.disagreeing.size() == 1 ? " (0-based) disagrees" : " (0-based) disagree") +
+                      " with the others: check those lights' directions and "
+                      "intensities, the images' order, and whether the object or "
+                      "camera moved");
+            }
+          }
         }
         if (check_frame && !depth_slip && result.ambiguity_deg.pixels.empty()) {
           // The mask's pixels with a normal: its edge is the silhouette the check reads.
@@ -303,7 +338,11 @@ the specular coefficients used or estimated, and a summary. Distant lights are c
 `iphong normals` checks a light file, with a UserWarning when they look like another frame:
 depth_axis_check (Woodham's normals facing away from the camera along each axis: lights whose
 depth axis is their x or y) and frame_check (the image-plane reading the normals fit best: y
-negated, x and y swapped, ...). With 1 or 2 images (material with
+negated, x and y swapped, ...); image_check says which images disagree with the others
+(misfit: per image, the median of |observation - model| / the censoring threshold over a sample of
+pixels; score: its modified z-score among the images; disagreeing: 0-based indices, with a
+UserWarning naming them: a light file out of order, a light's direction or intensity wrong, a
+moved object). With 1 or 2 images (material with
 kd required) the global solver with smoothness, integrability and boundary priors runs instead and
 the result has ambiguity_deg (H, W): the angle the data alone leaves open per pixel; it needs
 about 4 kB a masked pixel, and ValueError says so before it starts when that is more than

@@ -37,11 +37,13 @@ solve::NormalResult ResultFromMaps(const pybind11::object& maps, bool specular, 
 
 // estimate_normals' near lights (light_positions and the rest: the near-light loop) or, with
 // directions only and 3 images or more, the effective distance (light_distance); fills `out`'s
-// near-light entries and *result, or returns false to leave the solve to the caller.
+// near-light entries and *result (with the effective distance, *distant the distant solve's),
+// or returns false to leave the solve to the caller.
 bool SolveNear(const solve::PhotometricData& data, const solve::NormalOptions& options,
                const pybind11::object& light_positions, const pybind11::object& camera,
                const pybind11::object& light_axes, const pybind11::object& light_anisotropy,
                const pybind11::object& distance, const pybind11::object& light_distance,
-               pybind11::dict& out, solve::NormalResult* result);
+               pybind11::dict& out, solve::NormalResult* result,
+               solve::NormalResult* distant = nullptr);
 
 }  // namespace iphong::python

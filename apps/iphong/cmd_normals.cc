@@ -159,6 +159,12 @@ void RunNormals(const NormalsCommandOptions& o) {
     frame = CheckLightFrame(o, dataset, result.normals, with_normal);
   }
 
+  // The images against a render of the distant solve: with the lights as this data holds them.
+  const nlohmann::json image_check =
+      near_run
+          ? nullptr
+          : CheckImagesAgree(o, dataset, data, effective ? effective->distant : result, options);
+
   metrics["iphong_version"] = kVersion;
   metrics["dataset"] = o.dataset;
   metrics["input"] = NormalsInputJson(dataset);
@@ -179,6 +185,7 @@ void RunNormals(const NormalsCommandOptions& o) {
   if (frame) metrics["frame_check"] = FrameCheckJson(*frame);
   if (!encoding_check.is_null()) metrics["encoding_check"] = encoding_check;
   if (!depth_axis_check.is_null()) metrics["depth_axis_check"] = depth_axis_check;
+  if (!image_check.is_null()) metrics["image_check"] = image_check;
   std::optional<solve::AngularErrorMetrics> errors;
   if (!dataset.normal_gt.pixels.empty()) {
     try {

@@ -1,6 +1,10 @@
 // What a normals run checks of what it was given and reports in metrics.json: the images'
-// encoding, the light file's frame and depth axis (a warning, or with --strict an error), and
-// the angular errors against ground truth (normals_command.h).
+// encoding, the light file's frame and depth axis (a warning, or with --strict an error), the
+// images that disagree with the others, and the angular errors against ground truth
+// (normals_command.h).
+#include <cmath>
+#include <cstdio>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <stdexcept>
@@ -13,6 +17,7 @@
 #include "iphong/console.h"
 #include "iphong/normals_command.h"
 #include "solve/depth_axis.h"
+#include "solve/image_check.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
 #include "solve/reading_check.h"
@@ -122,6 +127,65 @@ nlohmann::json ReportDepthAxis(const NormalsCommandOptions& o, const io::Dataset
                       {"best_facing_away", c.best_facing}};
   if (!c.message.empty()) j["warning"] = c.message;
   return j;
+}
+
+nlohmann::json CheckImagesAgree(const NormalsCommandOptions& o, const io::Dataset& dataset,
+                                const solve::PhotometricData& data,
+                                const solve::NormalResult& result,
+                                const solve::NormalOptions& options) {
+  solve::ImageCheckOptions check;
+  check.saturation = options.saturation;
+  check.shadow_threshold = options.shadow_threshold;
+  if (options.material_known) check.known_ks = options.ks;
+  check.threads = o.common.threads;
+  const solve::ImageCheck c = solve::CheckImages(data, result, check);
+  if (!c.checked) return nullptr;
+  nlohmann::json images = nlohmann::json::array();
+  const auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nullptr; };
+  for (int j = 0; j < data.images; ++j) {
+    nlohmann::json image = {{"misfit", number(c.misfit[j])},
+                            {"score", number(c.score[j])},
+                            {"observations", c.observations[j]}};
+    if (static_cast<std::size_t>(j) < dataset.filenames.size()) {
+      image["file"] = dataset.filenames[j];
+    }
+    images.push_back(image);
+  }
+  nlohmann::json disagreeing = nlohmann::json::array();
+  std::string names, lines;
+  double least = std::numeric_limits<double>::infinity(), most = 0;
+  for (const int j : c.disagreeing) {
+    const std::string file = static_cast<std::size_t>(j) < dataset.filenames.size()
+                                 ? dataset.filenames[j]
+                                 : "image " + std::to_string(j + 1);
+    disagreeing.push_back(file);
+    names += (names.empty() ? "" : ", ") + file;
+    lines += (lines.empty() ? "" : ", ") + std::to_string(j + 1);
+    least = std::min(least, c.misfit[j]);
+    most = std::max(most, c.misfit[j]);
+  }
+  if (!c.disagreeing.empty()) {
+    const std::string& light_file = dataset.files.lights_path;
+    char figures[200];
+    std::snprintf(figures, sizeof figures,
+                  "at half of %zu pixels the model misses %s by more than %.2g shadow thresholds "
+                  "(the typical image: %.2g)",
+                  c.pixels, c.disagreeing.size() == 1 ? "it" : "each", least, c.typical_misfit);
+    Warn((light_file.empty() ? o.dataset : light_file) + ": " +
+         (c.disagreeing.size() == 1 ? "image " : "images ") + names +
+         (c.disagreeing.size() == 1 ? " disagrees" : " disagree") + " with the other " +
+         std::to_string(data.images - static_cast<int>(c.disagreeing.size())) + ": " + figures +
+         "; check the light file's line" + (c.disagreeing.size() == 1 ? " " : "s ") + lines +
+         " and the images' order, their intensities, and whether the object or camera moved");
+  }
+  (void)most;
+  return {{"pixels", c.pixels},
+          {"typical_misfit", c.typical_misfit},
+          {"score_limit", solve::kImageDisagreementZ},
+          {"heldout", c.heldout},
+          {"seconds", c.seconds},
+          {"disagreeing", disagreeing},
+          {"images", images}};
 }
 
 }  // namespace iphong::cli

@@ -107,6 +107,15 @@ nlohmann::json CheckDepthAxis(const NormalsCommandOptions& o, const io::Dataset&
 nlohmann::json ReportDepthAxis(const NormalsCommandOptions& o, const io::Dataset& dataset,
                                const std::vector<Vec3d>& lights, const solve::DepthAxisCheck& c);
 
+// Which images disagree with the others (solve/image_check.h), from how each agrees with a render
+// of `result`, a solve of `data`: a warning naming them and what to check (the light file's
+// order and those lines, the intensities, a moved object). metrics.json's "image_check", or null
+// when not checked (fewer than 6 images, the one- and two-image solve).
+nlohmann::json CheckImagesAgree(const NormalsCommandOptions& o, const io::Dataset& dataset,
+                                const solve::PhotometricData& data,
+                                const solve::NormalResult& result,
+                                const solve::NormalOptions& options);
+
 // Files that state no colour space were read as linear (io::EncodingChoice::assumed): whether the
 // data agree (solve/reading_check.h), a warning when decoding them as sRGB predicts held-out
 // photos clearly better. metrics.json's "encoding_check", or null when not asked.

@@ -220,3 +220,44 @@ def test_lights_in_another_frame_are_named(order, axis):
         assert f"with the lights' {axis} as the depth axis" in said[0], said[0]
         assert r["depth_axis_check"]["best_axis"] == axis
         assert "frame_check" not in r
+
+
+@pytest.mark.parametrize("mistake", ["none", "swapped", "intensity"])
+def test_images_that_disagree_with_the_others_are_named(mistake):
+    """As `iphong normals` says it (solve/image_check.h): a numpy-rendered Lambertian sphere under
+    12 lights with 1 % noise, its light array made wrong after the images were made: two rows
+    swapped, or one intensity halved (that image twice as bright as its light says). The default
+    solve; the images named are exactly those made wrong, with a UserWarning; the right lights
+    say nothing."""
+    import warnings
+    from brdf_zoo import sphere
+    n, mask = sphere(48)
+    k = 12
+    golden = np.pi * (3 - np.sqrt(5))
+    z = 1 - (1 - np.cos(np.radians(55))) * (np.arange(k) + 0.5) / k
+    lights = np.stack([np.sqrt(1 - z * z) * np.cos(golden * np.arange(k)),
+                       np.sqrt(1 - z * z) * np.sin(golden * np.arange(k)), z], -1)
+    rng = np.random.default_rng(3)
+    images = np.asarray([0.6 * np.clip(n @ l, 0, None)[..., None].repeat(3, -1) * mask[..., None]
+                         * (1 + 0.01 * rng.standard_normal(mask.shape))[..., None]
+                         for l in lights], np.float32)
+    given, intensities = lights.copy(), np.ones((k, 3))
+    if mistake == "swapped":
+        given[[3, 9]] = given[[9, 3]]
+    elif mistake == "intensity":
+        intensities[4] *= 0.5
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = iphong.estimate_normals(images, given, intensities, mask)
+    said = [str(w.message) for w in caught if "disagree" in str(w.message)]
+    check = r["image_check"]
+    assert check["heldout"] and len(check["misfit"]) == k
+    expected = {"none": [], "swapped": [3, 9], "intensity": [4]}[mistake]
+    assert check["disagreeing"] == expected
+    if expected:
+        assert len(said) == 1 and said[0].startswith(
+            "images 3, 9 (0-based) disagree" if mistake == "swapped" else
+            "image 4 (0-based) disagrees"), said
+        assert min(check["misfit"][j] for j in expected) > 1
+    else:
+        assert said == [] and max(check["misfit"]) < 0.3
