@@ -339,7 +339,7 @@ the specular coefficients used or estimated, and a summary. Distant lights are c
 depth_axis_check (Woodham's normals facing away from the camera along each axis: lights whose
 depth axis is their x or y) and frame_check (the image-plane reading the normals fit best: y
 negated, x and y swapped, ...); image_check says which images disagree with the others
-(misfit: per image, the median of |observation - model| / the censoring threshold over a sample of
+(misfit: per image, the median of abs(observation - model) / the censoring threshold over a sample of
 pixels; score: its modified z-score among the images; disagreeing: 0-based indices, with a
 UserWarning naming them: a light file out of order, a light's direction or intensity wrong, a
 moved object). With 1 or 2 images (material with
