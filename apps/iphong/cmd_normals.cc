@@ -159,10 +159,11 @@ void RunNormals(const NormalsCommandOptions& o) {
     frame = CheckLightFrame(o, dataset, result.normals, with_normal);
   }
 
-  // The images against a render of the distant solve: with the lights as this data holds them.
+  // The images against a render of the result with the lights it was solved under: the near
+  // run's point lights from its surface, or directions only and the distant solve.
   const nlohmann::json image_check =
       near_run
-          ? nullptr
+          ? CheckImagesAgree(o, dataset, NearRunData(dataset, data, *near_run), result, options)
           : CheckImagesAgree(o, dataset, data, effective ? effective->distant : result, options);
 
   metrics["iphong_version"] = kVersion;

@@ -148,6 +148,22 @@ void CheckLedAxesFaceTheObject(const io::NearLightFiles& files, const near::Near
 
 }  // namespace
 
+solve::PhotometricData NearRunData(const io::Dataset& d, const solve::PhotometricData& observations,
+                                   const NearRun& run) {
+  solve::PhotometricData data = observations;
+  data.point_lights = io::NearPointLights(d.files.near, observations.light_intensities);
+  data.perspective = run.frame.perspective;
+  data.points_cam.resize(data.pixels.size());
+  const ImageF& points = run.result.points;
+  for (std::size_t i = 0; i < data.pixels.size(); ++i) {
+    const std::size_t p = static_cast<std::size_t>(data.pixels[i]);
+    data.points_cam[i] =
+        Vec3d(points.pixels[3 * p], points.pixels[3 * p + 1], points.pixels[3 * p + 2]);
+  }
+  solve::SetReferenceLights(data, solve::MeanPoint(data));
+  return data;
+}
+
 NearRun SolveNearCapture(const NormalsCommandOptions& o, const io::Dataset& d,
                          const solve::PhotometricData& observations,
                          const solve::NormalOptions& options) {

@@ -450,9 +450,14 @@ def test_an_image_listed_for_two_lights_is_named(rendered, tmp_path):
     (ds / "filenames.txt").write_text("\n".join(lines) + "\n")
     code, _, err = run("normals", ds, "-o", tmp_path / "out")
     assert code == 0, err
-    assert err.splitlines() == [
+    said = err.splitlines()
+    assert said[0] == (
         f"iphong: warning: {ds}/filenames.txt: lists 005.png 2 times (2 of 12 entries name an "
-        "image listed more than once): each light needs its own photograph"]
+        "image listed more than once): each light needs its own photograph")
+    # Then which of the two is out of place: the photo under light 6 (solve/image_check.h).
+    assert len(said) == 2 and said[1].startswith(
+        f"iphong: warning: {ds}/light_directions.txt: image 005.png disagrees with the other 11"), said
+    assert "line 6 " in said[1], said[1]
 
 
 def test_one_photo_under_two_names_is_named_and_one_photo_under_every_name_refused(rendered,
@@ -465,9 +470,14 @@ def test_one_photo_under_two_names_is_named_and_one_photo_under_every_name_refus
     shutil.copy(ds / "005.png", ds / "006.png")
     code, _, err = run("normals", ds, "-o", tmp_path / "out")
     assert code == 0, err
-    assert err.splitlines() == [
+    said = err.splitlines()
+    assert said[0] == (
         "iphong: warning: 1 of 12 images repeat another pixel for pixel inside the mask (005.png "
-        "and 006.png are identical): one photo saved under two names? Each light needs its own"]
+        "and 006.png are identical): one photo saved under two names? Each light needs its own")
+    # Then which of the pair is out of place: 006.png, under light 6 (solve/image_check.h).
+    assert len(said) == 2 and said[1].startswith(
+        f"iphong: warning: {ds}/light_directions.txt: image 006.png disagrees with the other 11"), said
+    assert "line 6 " in said[1], said[1]
     pixels = json.loads((tmp_path / "out" / "metrics.json").read_text())["pixels"]
     for name in (ds / "filenames.txt").read_text().split():
         if name != "005.png":

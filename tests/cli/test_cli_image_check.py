@@ -91,3 +91,27 @@ def test_uw_cats_darker_photo_is_named(tmp_path):
     assert check["disagreeing"] == ["cat.2.tga"]
     assert check["images"][2]["misfit"] > 1 > max(
         image["misfit"] for n, image in enumerate(check["images"]) if n != 2)
+
+
+def test_near_lights_two_swapped_positions_are_named(tmp_path):
+    """A near-light capture (24 LEDs, point lights seen from each pixel's point): its images are
+    checked against the near run's result; two lines of light_positions.txt swapped are named."""
+    capture = tmp_path / "capture"
+    code, _, err = run("render", ROOT / "fixtures" / "scenes" / "near_dome_leds_phong.json", "-o",
+                       capture, "--per-light")
+    assert code == 0, err
+    code, _, err = run("normals", capture, "-o", tmp_path / "right")
+    assert code == 0, err
+    assert disagreement(err) == [], err
+    assert check_of(tmp_path / "right")["disagreeing"] == []
+    (capture / ".iphong-manifest.json").unlink()
+    (capture / "light_directions.txt").unlink()  # it would contradict the swapped positions
+    lines = (capture / "light_positions.txt").read_text().splitlines()
+    lines[2], lines[8] = lines[8], lines[2]
+    (capture / "light_positions.txt").write_text("\n".join(lines) + "\n")
+    code, _, err = run("normals", capture, "-o", tmp_path / "swapped")
+    assert code == 0, err
+    warnings = disagreement(err)
+    assert len(warnings) == 1 and "003.png, 009.png" in warnings[0], err
+    assert warnings[0].startswith(f"iphong: warning: {capture / 'light_positions.txt'}: ")
+    assert check_of(tmp_path / "swapped")["disagreeing"] == ["003.png", "009.png"]
