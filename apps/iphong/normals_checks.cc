@@ -153,7 +153,7 @@ nlohmann::json CheckImagesAgree(const NormalsCommandOptions& o, const io::Datase
   }
   nlohmann::json disagreeing = nlohmann::json::array();
   std::string names, lines;
-  double least = std::numeric_limits<double>::infinity(), most = 0;
+  double least = std::numeric_limits<double>::infinity();
   for (const int j : c.disagreeing) {
     const std::string file = static_cast<std::size_t>(j) < dataset.filenames.size()
                                  ? dataset.filenames[j]
@@ -162,7 +162,6 @@ nlohmann::json CheckImagesAgree(const NormalsCommandOptions& o, const io::Datase
     names += (names.empty() ? "" : ", ") + file;
     lines += (lines.empty() ? "" : ", ") + std::to_string(j + 1);
     least = std::min(least, c.misfit[j]);
-    most = std::max(most, c.misfit[j]);
   }
   if (!c.disagreeing.empty()) {
     const std::string& light_file = dataset.files.lights_path;
@@ -175,10 +174,10 @@ nlohmann::json CheckImagesAgree(const NormalsCommandOptions& o, const io::Datase
          (c.disagreeing.size() == 1 ? "image " : "images ") + names +
          (c.disagreeing.size() == 1 ? " disagrees" : " disagree") + " with the other " +
          std::to_string(data.images - static_cast<int>(c.disagreeing.size())) + ": " + figures +
-         "; check the light file's line" + (c.disagreeing.size() == 1 ? " " : "s ") + lines +
-         " and the images' order, their intensities, and whether the object or camera moved");
+         // Lights by their order (a light file may begin with a count line).
+         "; check light" + (c.disagreeing.size() == 1 ? " " : "s ") + lines + " of the light file" +
+         ", the images' order, their intensities, and whether the object or camera moved");
   }
-  (void)most;
   return {{"pixels", c.pixels},
           {"typical_misfit", c.typical_misfit},
           {"score_limit", solve::kImageDisagreementZ},

@@ -457,7 +457,7 @@ def test_an_image_listed_for_two_lights_is_named(rendered, tmp_path):
     # Then which of the two is out of place: the photo under light 6 (solve/image_check.h).
     assert len(said) == 2 and said[1].startswith(
         f"iphong: warning: {ds}/light_directions.txt: image 005.png disagrees with the other 11"), said
-    assert "line 6 " in said[1], said[1]
+    assert "light 6 of" in said[1], said[1]
 
 
 def test_one_photo_under_two_names_is_named_and_one_photo_under_every_name_refused(rendered,
@@ -477,7 +477,7 @@ def test_one_photo_under_two_names_is_named_and_one_photo_under_every_name_refus
     # Then which of the pair is out of place: 006.png, under light 6 (solve/image_check.h).
     assert len(said) == 2 and said[1].startswith(
         f"iphong: warning: {ds}/light_directions.txt: image 006.png disagrees with the other 11"), said
-    assert "line 6 " in said[1], said[1]
+    assert "light 6 of" in said[1], said[1]
     pixels = json.loads((tmp_path / "out" / "metrics.json").read_text())["pixels"]
     for name in (ds / "filenames.txt").read_text().split():
         if name != "005.png":

@@ -47,13 +47,13 @@ def test_a_wrong_light_file_is_named(sphere, tmp_path, mistake):
     extra = []
     if mistake == "swapped":
         lines[3], lines[9] = lines[9], lines[3]
-        expected, said = ["004.png", "010.png"], "lines 4, 10"
+        expected, said = ["004.png", "010.png"], "lights 4, 10 of"
     else:
         intensities = ["1 1 1"] * len(lines)
         intensities[4] = "0.5 0.5 0.5"
         (tmp_path / "intensities.txt").write_text("\n".join(intensities) + "\n")
         extra = ["--intensities", tmp_path / "intensities.txt"]
-        expected, said = ["005.png"], "line 5 "
+        expected, said = ["005.png"], "light 5 of"
     (tmp_path / "lights.txt").write_text("\n".join(lines) + "\n")
     code, _, err = run("normals", sphere, "--lights", tmp_path / "lights.txt", *extra, "-o",
                        tmp_path / "out")
