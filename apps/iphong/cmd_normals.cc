@@ -23,6 +23,7 @@
 #include "iphong/commands.h"
 #include "iphong/console.h"
 #include "iphong/normals_command.h"
+#include "solve/image_check.h"
 #include "solve/metrics.h"
 #include "solve/normals.h"
 
@@ -163,7 +164,10 @@ void RunNormals(const NormalsCommandOptions& o) {
   // run's point lights from its surface, or directions only and the distant solve.
   const nlohmann::json image_check =
       near_run
-          ? CheckImagesAgree(o, dataset, NearRunData(dataset, data, *near_run), result, options)
+          ? CheckImagesAgree(
+                o, dataset,
+                NearRunData(dataset, data, *near_run, solve::ImageCheckOptions{}.sample), result,
+                options)
           : CheckImagesAgree(o, dataset, data, effective ? effective->distant : result, options);
 
   metrics["iphong_version"] = kVersion;

@@ -163,10 +163,11 @@ struct NearRun {
 NearRun SolveNearCapture(const NormalsCommandOptions& o, const io::Dataset& d,
                          const solve::PhotometricData& observations,
                          const solve::NormalOptions& options);
-// The observations as the near run's last pass saw them: its point lights, seen from the points
-// of its surface (for checking the images against its result).
+// The observations of `sample` pixels spread over the mask as the near run's last pass saw them:
+// its point lights, seen from the points of its surface (for checking the images against its
+// result).
 solve::PhotometricData NearRunData(const io::Dataset& d, const solve::PhotometricData& observations,
-                                   const NearRun& run);
+                                   const NearRun& run, std::size_t sample);
 // Directions only (near/effective_distance.h): the distant solve and, unless --light-distance
 // inf, the effective distance chosen (or given) and the near passes; metrics.json's
 // "effective_distance".

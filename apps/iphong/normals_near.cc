@@ -16,6 +16,8 @@
 #include "iphong/normals_command.h"
 #include "near/near.h"
 #include "reflectance/lighting.h"
+#include "solve/model_choice.h"
+#include "solve/normals.h"
 
 namespace iphong::cli {
 namespace {
@@ -149,8 +151,12 @@ void CheckLedAxesFaceTheObject(const io::NearLightFiles& files, const near::Near
 }  // namespace
 
 solve::PhotometricData NearRunData(const io::Dataset& d, const solve::PhotometricData& observations,
-                                   const NearRun& run) {
-  solve::PhotometricData data = observations;
+                                   const NearRun& run, std::size_t sample) {
+  // Only the check's spread sample: a copy of every observation would double the run's memory.
+  solve::PhotometricData data = solve::SubsetObservations(
+      observations,
+      solve::SpreadIndices(observations.pixel_count(),
+                           static_cast<int>(std::min(sample, observations.pixel_count()))));
   data.point_lights = io::NearPointLights(d.files.near, observations.light_intensities);
   data.perspective = run.frame.perspective;
   data.points_cam.resize(data.pixels.size());
